@@ -1,0 +1,217 @@
+"""`b2d`: everything a person does by hand with the data factory."""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from pathlib import Path
+
+import click
+
+from sim import registry
+from sim.errors import SpecError, UnknownNameError
+
+
+def _fail(message: str) -> None:
+    click.echo(f"error: {message}", err=True)
+    sys.exit(2)
+
+
+class _Group(click.Group):
+    """Turn the project's validation errors into one clear line and exit code 2."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except (SpecError, UnknownNameError) as exc:
+            _fail(str(exc))
+
+
+@click.group(cls=_Group)
+@click.option("-v", "--verbose", is_flag=True, help="Log progress details.")
+def cli(verbose: bool) -> None:
+    """Bench2Dex data factory: record, replay, render, validate and benchmark."""
+    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+
+
+# ---------------------------------------------------------------- list
+
+
+def _rows(kind: str) -> list[dict]:
+    if kind == "embodiments":
+        from sim.embodiment import load_embodiment
+        rows = []
+        for name in registry.names("embodiments"):
+            e = load_embodiment(name)
+            rows.append({"name": name, "display_name": e.display_name, "arm": e.arm.name, "hand": e.hand.name})
+        return rows
+    if kind == "tasks":
+        from sim.tasks import load_task
+        rows = []
+        for name in registry.names("tasks"):
+            t = load_task(name)
+            rows.append({"name": name, "display_name": t.display_name, "paper_embodiment": t.paper_embodiment,
+                         "stages": [s["id"] for s in t.metrics.get("stages", [])]})
+        return rows
+    if kind == "settings":
+        return [{"key": s.key, "task": s.task, "embodiment": s.embodiment, "available": s.available}
+                for s in registry.paper_settings()]
+    if kind == "profiles":
+        rows = []
+        for name in registry.names("sensor_profiles"):
+            p = registry.sensor_profile(name)
+            rows.append({"name": name, "description": p.description, "rate_hz": p.rate_hz,
+                         "cameras": list(p.camera_ids), "resolution": [p.width, p.height],
+                         "tactile": list(p.tactile_shape) if p.tactile_enabled else None, "hash": p.content_hash})
+        return rows
+    if kind == "channels":
+        return [vars(registry.channel(c)) for c in registry.channel_names()]
+    raise AssertionError(kind)
+
+
+@cli.command("list")
+@click.argument("kind", type=click.Choice(["embodiments", "tasks", "settings", "profiles", "channels"]))
+@click.option("--json", "as_json", is_flag=True, help="Print a JSON list.")
+def list_cmd(kind: str, as_json: bool) -> None:
+    """List embodiments, tasks, settings, sensor profiles or channels."""
+    rows = _rows(kind)
+    if as_json:
+        click.echo(json.dumps(rows, indent=2))
+        return
+    for row in rows:
+        first, *rest = row.values()
+        click.echo(f"{first:<40} " + "  ".join(str(v) for v in rest))
+
+
+# ---------------------------------------------------------------- record / replay / validate
+
+
+@cli.command()
+@click.option("--task", required=True)
+@click.option("--embodiment", required=True)
+@click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1))
+@click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
+@click.option("--first-index", default=0, show_default=True, help="Index of the first episode (sets its seed).")
+@click.option("--max-steps", default=None, type=int, help="Cap each episode's control steps.")
+def record(task, embodiment, episodes, out_dir, first_index, max_steps) -> None:
+    """Record raw demonstrations with the scripted operator."""
+    from teleop.demos import record_demonstrations
+
+    registry.validate_name("task", task)
+    registry.validate_name("embodiment", embodiment)
+    with click.progressbar(length=episodes, label=f"recording {task} on {embodiment}", file=sys.stderr) as bar:
+        results = record_demonstrations(task, embodiment, episodes, out_dir, max_steps=max_steps,
+                                        first_index=first_index, progress=bar.update)
+    for r in results:
+        status = "error: " + r.error if r.error else ("success" if r.success else "no success")
+        click.echo(f"{r.episode_id}  steps={r.steps:<5} {status}  {r.path or ''}")
+    if any(r.error for r in results):
+        sys.exit(1)
+
+
+@cli.command()
+@click.argument("raw", nargs=-1, required=True, type=click.Path(exists=True, path_type=Path))
+@click.option("--profile", default="preview", show_default=True)
+@click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
+@click.option("--max-frames", default=None, type=int, help="Render at most this many frames per episode.")
+def replay(raw, profile, out_dir, max_frames) -> None:
+    """Replay raw recordings into HDF5 episodes under a sensor profile."""
+    from episodes.manifest import write_manifest
+    from episodes.stages import raw_to_episode
+
+    prof = registry.sensor_profile(profile)
+    failures = 0
+    with click.progressbar(raw, label=f"replaying under '{profile}'", file=sys.stderr) as paths:
+        for path in paths:
+            try:
+                out = raw_to_episode(path, prof, out_dir, max_frames=max_frames)
+                click.echo(f"\n{path} -> {out}", err=True)
+            except (SpecError, UnknownNameError) as exc:   # one bad episode never stops the others
+                failures += 1
+                click.echo(f"\nerror: {exc}", err=True)
+    if Path(out_dir).exists():
+        write_manifest(out_dir)
+    if failures:
+        sys.exit(1)
+
+
+@cli.command()
+@click.argument("episode", nargs=-1, required=True, type=click.Path(path_type=Path))
+def validate(episode) -> None:
+    """Check HDF5 episodes against the schema; exit 1 when any fails."""
+    from episodes.validate import validate_episode
+
+    bad = 0
+    for path in episode:
+        problems = validate_episode(path)
+        if problems:
+            bad += 1
+            click.echo(f"{path}: INVALID ({len(problems)} problems)")
+            for p in problems:
+                click.echo(f"  - {p}")
+        else:
+            click.echo(f"{path}: ok")
+    sys.exit(1 if bad else 0)
+
+
+# ---------------------------------------------------------------- bench
+
+
+@cli.command()
+@click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "embodiments"]))
+@click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay).")
+@click.option("--steps", default=120, show_default=True, help="Control steps to record (recorder, replay).")
+def bench(part, profile, steps) -> None:
+    """Print benchmark figures as JSON on stdout."""
+    if part == "tactile":
+        from tactile.bench import run_tactile_bench
+        figures = run_tactile_bench()
+    elif part == "embodiments":
+        from sim.embodiment.bench import run_embodiment_bench
+        figures = run_embodiment_bench()
+    else:
+        from b2d_cli import benchmarks
+        figures = benchmarks.run(part, profile=profile, steps=steps)
+    click.echo(json.dumps(figures, indent=2))
+
+
+# ---------------------------------------------------------------- pipeline
+
+
+@cli.command()
+@click.option("--setting", "settings_", multiple=True, help="Setting key(s); default: every available setting.")
+@click.option("--profile", default=None, help="Sensor profile (default: $B2D_PROFILE or preview).")
+@click.option("--episodes", default=None, type=int, help="Demonstrations per setting.")
+@click.option("--eval-episodes", default=None, type=int, help="Rollouts per (setting, channel).")
+@click.option("--max-steps", default=None, type=int, help="Cap on control steps per episode.")
+def materialize(settings_, profile, episodes, eval_episodes, max_steps) -> None:
+    """Materialize the whole asset chain (recordings -> ... -> evaluation table) with Dagster."""
+    import os
+
+    import dagster as dg
+
+    from b2d_pipeline.demo import materialize_chain
+    from b2d_pipeline.partitions import setting_keys
+    from b2d_pipeline.settings import FactorySettings, default_dagster_home
+
+    overrides = {k: v for k, v in {"profile": profile, "demo_episodes": episodes, "eval_episodes": eval_episodes,
+                                   "max_steps": max_steps}.items() if v is not None}
+    settings = FactorySettings.from_env(**overrides)
+    for key in settings_:
+        registry.parse_setting_key(key)
+    home = os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home(settings.data_root)))
+    os.makedirs(home, exist_ok=True)
+    with dg.DagsterInstance.get() as instance:
+        results = materialize_chain(settings, list(settings_) or setting_keys(), instance,
+                                    log=lambda m: click.echo(m, err=True))
+    table = settings.data_root / "evaluation" / "evaluation_table.parquet"
+    if table.exists():
+        import pandas as pd
+        cols = ["task", "embodiment", "policy", "channel", "N", "SR", "LSCR"]
+        click.echo(pd.read_parquet(table)[cols].to_string(index=False))
+    sys.exit(0 if all(r.success for r in results) else 1)
+
+
+if __name__ == "__main__":
+    cli()

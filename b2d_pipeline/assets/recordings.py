@@ -1,0 +1,31 @@
+"""Raw teleoperation recordings (scripted operator) per setting."""
+
+
+import dagster as dg
+
+from b2d_pipeline.assets.common import data_version, fail_if_errors
+from b2d_pipeline.partitions import settings_partitions
+from b2d_pipeline.resources import EpisodeStore
+from b2d_pipeline.settings import FactorySettings
+from sim.registry import parse_setting_key
+from teleop.demos import record_demonstrations
+
+
+def build(settings: FactorySettings):
+    @dg.asset(partitions_def=settings_partitions, group_name="recordings", code_version="1",
+              description="Raw demonstrations: actions, post-step states and evaluator state per step.")
+    def raw_recordings(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
+        setting = parse_setting_key(context.partition_key)
+        out = store.raw_dir(context.partition_key)
+        results = record_demonstrations(setting.task, setting.embodiment, settings.demo_episodes, out,
+                                        max_steps=settings.max_steps)
+        paths = [r.path for r in results if r.path]
+        fail_if_errors({r.episode_id: r.error for r in results if r.error}, len(paths))
+        described = store.describe(paths)
+        return dg.MaterializeResult(
+            metadata={"episodes": len(paths), "successes": sum(r.success for r in results),
+                      "steps": [r.steps for r in results], "files": dg.MetadataValue.json(described),
+                      "directory": dg.MetadataValue.path(str(out))},
+            data_version=data_version(described))
+
+    return raw_recordings

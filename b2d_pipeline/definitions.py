@@ -1,0 +1,30 @@
+"""Assemble the factory's Dagster definitions; nothing else lives here."""
+
+from __future__ import annotations
+
+import os
+
+import dagster as dg
+
+from b2d_pipeline import checks, schedules
+from b2d_pipeline.assets import episodes, evaluation, recordings, renders, replays
+from b2d_pipeline.resources import EpisodeStore
+from b2d_pipeline.settings import FactorySettings, default_dagster_home
+
+
+def build_definitions(settings: FactorySettings | None = None) -> dg.Definitions:
+    settings = settings or FactorySettings.from_env()
+    episodes_asset = episodes.build(settings)
+    rollouts, table = evaluation.build(settings)
+    return dg.Definitions(
+        assets=[recordings.build(settings), replays.build(), renders.build(settings), episodes_asset, rollouts, table],
+        asset_checks=checks.build(settings, episodes_asset),
+        jobs=[schedules.production_job, schedules.rerender_job],
+        schedules=[schedules.nightly_rerender],
+        sensors=[schedules.automation_sensor],
+        resources={"store": EpisodeStore(data_root=str(settings.data_root))},
+    )
+
+
+os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home()))
+defs = build_definitions()

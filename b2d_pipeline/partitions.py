@@ -1,0 +1,22 @@
+"""Partitions: one key per task-embodiment setting, and setting x channel for evaluation."""
+
+from __future__ import annotations
+
+import dagster as dg
+
+from sim.registry import channel_names, paper_settings
+
+
+def setting_keys() -> list[str]:
+    """The paper's settings whose task and embodiment files are in the catalog."""
+    return [s.key for s in paper_settings() if s.available]
+
+
+settings_partitions = dg.StaticPartitionsDefinition(setting_keys())
+channel_partitions = dg.StaticPartitionsDefinition(channel_names())
+setting_channel_partitions = dg.MultiPartitionsDefinition(
+    {"setting": settings_partitions, "channel": channel_partitions})
+
+
+def setting_channel_key(setting: str, channel: str) -> dg.MultiPartitionKey:
+    return dg.MultiPartitionKey({"setting": setting, "channel": channel})

@@ -1,0 +1,44 @@
+"""The factory's run settings, read once from the environment when the code location loads.
+
+The active sensor profile is part of the code location (not run config) on purpose: its content
+hash is the render assets' code version, so editing or switching the profile marks the renders
+and everything downstream stale in the UI.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from sim.registry import SensorProfile, sensor_profile
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+
+
+@dataclass(frozen=True)
+class FactorySettings:
+    data_root: Path
+    profile: SensorProfile
+    demo_episodes: int          # raw recordings per setting
+    eval_episodes: int          # rollouts per (setting, channel)
+    max_steps: int | None       # cap on control steps per episode (tests, quick looks)
+
+    @classmethod
+    def from_env(cls, **overrides) -> "FactorySettings":
+        max_steps = os.environ.get("B2D_MAX_STEPS")
+        values = dict(
+            data_root=Path(os.environ.get("B2D_DATA_ROOT", REPO_ROOT / "data")),
+            profile=sensor_profile(os.environ.get("B2D_PROFILE", "preview")),
+            demo_episodes=int(os.environ.get("B2D_DEMO_EPISODES", "2")),
+            eval_episodes=int(os.environ.get("B2D_EVAL_EPISODES", "2")),
+            max_steps=int(max_steps) if max_steps else None,
+        )
+        values.update(overrides)
+        if isinstance(values["profile"], str):
+            values["profile"] = sensor_profile(values["profile"])
+        return cls(**values)
+
+
+def default_dagster_home(data_root: Path | None = None) -> Path:
+    return Path(data_root or REPO_ROOT / "data") / "dagster_home"

@@ -1,0 +1,121 @@
+"""Raw recordings: the lightweight motion stream written while an operator drives the robot.
+
+One HDF5 file per episode holding what replay needs to reproduce it exactly: the full MuJoCo
+integration state after homing, the seed and resolved scene sample, and per control step the action
+executed next followed by the post-step robot/object state and the evaluator state (paper:
+"Online Teleoperation Setup"). Reading validates everything and names the file and field at fault.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from episodes.atomic import atomic_path
+from sim.errors import SpecError
+
+RAW_SCHEMA = "b2d.raw/1"
+
+
+@dataclass
+class RawRecording:
+    task: str
+    embodiment: str
+    episode_id: str
+    seed: int
+    scene_sample: str                 # SceneSample JSON
+    operator: str                     # "scripted" | "teleop:<adapter>"
+    control_hz: int
+    substeps: int
+    initial_state: np.ndarray         # mj_getState(mjSTATE_INTEGRATION) after homing
+    actuator_names: list[str]
+    robot_joint_names: list[str]
+    object_names: list[str]
+    action: np.ndarray                # [T, nu] float64 absolute joint targets
+    robot_qpos: np.ndarray            # [T, J] post-step
+    robot_qvel: np.ndarray            # [T, J]
+    object_pose: np.ndarray           # [T, N, 7] post-step, xyz + wxyz
+    terminal: np.ndarray              # [T] bool evaluator terminal predicate
+    stage_latched: np.ndarray         # [T, K] bool
+    stage_ids: list[str]
+    step_flags: np.ndarray            # [T] uint8, operator-stream flags (0 = clean)
+    success: bool
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def num_steps(self) -> int:
+        return int(self.action.shape[0])
+
+
+_ARRAYS = ("initial_state", "action", "robot_qpos", "robot_qvel", "object_pose", "terminal",
+           "stage_latched", "step_flags")
+_ATTRS = ("task", "embodiment", "episode_id", "seed", "scene_sample", "operator", "control_hz",
+          "substeps", "success")
+_LISTS = ("actuator_names", "robot_joint_names", "object_names", "stage_ids")
+
+
+def write_raw(path: str | Path, rec: RawRecording) -> Path:
+    path = Path(path)
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs["schema"] = RAW_SCHEMA
+        for key in _ATTRS:
+            f.attrs[key] = getattr(rec, key)
+        f.attrs["extra"] = json.dumps(rec.extra, sort_keys=True)
+        for key in _LISTS:
+            f.attrs[key] = json.dumps(getattr(rec, key))
+        for key in _ARRAYS:
+            f.create_dataset(key, data=getattr(rec, key), compression="gzip", compression_opts=4)
+    return path
+
+
+def read_raw(path: str | Path) -> RawRecording:
+    """Load and validate a raw recording; every failure names the file and the field."""
+    path = Path(path)
+    try:
+        f = h5py.File(path, "r")
+    except OSError as exc:
+        raise SpecError(path, "<file>", "a complete HDF5 raw recording (file is truncated or not HDF5)") from exc
+    with f:
+        if f.attrs.get("schema") != RAW_SCHEMA:
+            raise SpecError(path, "schema", f"'{RAW_SCHEMA}'", f.attrs.get("schema"))
+        values = {}
+        for key in _ATTRS:
+            if key not in f.attrs:
+                raise SpecError(path, key, "an attribute")
+            value = f.attrs[key]
+            values[key] = value.item() if isinstance(value, np.generic) else value
+        for key in _LISTS:
+            values[key] = json.loads(f.attrs.get(key, "[]"))
+        values["extra"] = json.loads(f.attrs.get("extra", "{}"))
+        for key in _ARRAYS:
+            if key not in f:
+                raise SpecError(path, key, "a dataset")
+            try:
+                values[key] = f[key][()]
+            except OSError as exc:
+                raise SpecError(path, key, "readable data (file is truncated)") from exc
+    rec = RawRecording(**values)
+    _check_consistency(path, rec)
+    return rec
+
+
+def _check_consistency(path: Path, rec: RawRecording) -> None:
+    T = rec.num_steps
+    if rec.action.ndim != 2 or rec.action.shape[1] != len(rec.actuator_names):
+        raise SpecError(path, "action", f"shape [T, {len(rec.actuator_names)}] (one column per actuator)",
+                        tuple(rec.action.shape))
+    bad = np.argwhere(~np.isfinite(rec.action))
+    if bad.size:
+        step, col = bad[0]
+        raise SpecError(path, "action", "finite joint targets",
+                        f"non-finite value at step {step}, actuator '{rec.actuator_names[col]}'")
+    expected = {"robot_qpos": (T, len(rec.robot_joint_names)), "robot_qvel": (T, len(rec.robot_joint_names)),
+                "object_pose": (T, len(rec.object_names), 7), "terminal": (T,),
+                "stage_latched": (T, len(rec.stage_ids)), "step_flags": (T,)}
+    for key, shape in expected.items():
+        if getattr(rec, key).shape != shape:
+            raise SpecError(path, key, f"shape {shape}", tuple(getattr(rec, key).shape))

@@ -1,0 +1,81 @@
+"""The per-episode HDF5 layout (paper appendix "HDF5 Schema Details"): one module owns it.
+
+Writers and the validator both read these declarations; a reader never needs to know how a file
+was written. Shapes use symbols: T frames, J robot joints, A actions, H/W camera pixels,
+Ht/Wt tactile pixels. `None` in a shape means "any".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+SCHEMA_VERSION = "b2d.episode/1"
+MANIFEST_NAME = "episode_manifest.json"
+
+
+@dataclass(frozen=True)
+class Node:
+    path: str                  # relative; "{camera_id}" / "{obj_id}" / "{site}" are placeholders
+    kind: str                  # "dataset" | "group"
+    dtype: str | None = None   # numpy kind: "uint8", "float32", "float64", "int64", "bool", "str"
+    shape: tuple | None = None
+    required: bool = True
+    modality: str | None = None
+
+
+META_FIELDS = ("task", "embodiment", "instruction", "scene", "modalities", "cameras",
+               "collection_config", "success", "schema_version", "dataset", "replay_fidelity")
+
+EPISODE_NODES = (
+    *(Node(f"meta/{name}", "dataset", "str" if name != "success" else "bool", ()) for name in META_FIELDS),
+    Node("time/frame_index", "dataset", "int64", ("T",)),
+    Node("time/timestamp_ns", "dataset", "int64", ("T",)),
+    Node("time/sim_step", "dataset", "int64", ("T",)),
+    Node("episode/is_first", "dataset", "bool", ("T",)),
+    Node("episode/is_last", "dataset", "bool", ("T",)),
+    Node("episode/done", "dataset", "bool", ("T",)),
+    Node("episode/success", "dataset", "bool", ("T",)),
+    Node("action/action", "dataset", "float64", ("T", "A")),
+    Node("action/valid", "dataset", "bool", ("T",)),
+    Node("action/names", "dataset", "str", ("A",)),
+    Node("action/source", "dataset", "str", ()),
+    Node("action/control_mode", "dataset", "str", ()),
+    Node("action/action_type", "dataset", "str", ()),
+    Node("frame_valid", "dataset", "bool", ("T",)),
+    Node("frame_errors", "dataset", "str", ("T",)),
+    Node("robot/joint_names", "dataset", "str", ("J",)),
+    Node("robot/qpos", "dataset", "float64", ("T", "J"), modality="robot_state"),
+    Node("robot/qvel", "dataset", "float64", ("T", "J"), modality="robot_state"),
+    Node("robot/qeffort", "dataset", "float64", ("T", "J"), modality="robot_state"),
+    Node("metrics/episode", "dataset", "str", ()),
+    Node("metrics/timeseries", "group"),
+)
+
+CAMERA_NODES = (
+    Node("rgb", "dataset", "uint8", ("T", "H", "W", 3), modality="rgb"),
+    Node("depth_m", "dataset", "float32", ("T", "H", "W"), modality="depth"),
+    Node("depth_semantics", "dataset", "str", (), modality="depth"),
+    Node("intrinsic", "dataset", "float64", (3, 3)),
+    Node("extrinsic_world_from_cam", "dataset", "float64", ("T", 4, 4)),
+    Node("camera_model", "dataset", "str", ()),
+    Node("clip_range_m", "dataset", "float64", (2,)),
+)
+
+OBJECT_NODES = (
+    Node("pose_world", "dataset", "float64", ("T", 7), modality="object_state"),
+    Node("lin_vel_world", "dataset", "float64", ("T", 3), modality="object_state"),
+    Node("ang_vel_world", "dataset", "float64", ("T", 3), modality="object_state"),
+)
+
+DEPTH_SEMANTICS = ("metric z-depth in metres along the camera optical axis (OpenCV camera frame: "
+                   "x right, y down, z forward); the far clip value where nothing is hit")
+CAMERA_MODEL = "pinhole"
+CONTROL_MODE = "absolute_joint_position"
+ACTION_TYPE = "joint_position_target"
+
+# Per-dataset storage: images compress with LZF (fast); everything else with gzip.
+IMAGE_CHUNK_FRAMES = 1
+
+
+def episode_filename(episode_id: str) -> str:
+    return f"episode_{episode_id}.hdf5"

@@ -1,0 +1,98 @@
+"""Stream an episode into the paper's HDF5 layout, one frame at a time, in bounded memory.
+
+The file is written under a temporary name and renamed when complete, so a failing episode
+leaves nothing behind. Frames that cannot be fully captured are kept and flagged in
+`frame_valid` / `frame_errors` instead of aborting the episode.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from episodes import schema
+from episodes.atomic import atomic_path
+
+STR = h5py.string_dtype()
+
+
+class EpisodeWriter:
+    """Usage: `with EpisodeWriter(path, static) as w: w.append(frame) ...`.
+
+    `static` holds what does not change per frame (meta, names, intrinsics); each `frame` is a
+    dict of relative dataset paths -> per-frame arrays (e.g. "cameras/chest/rgb": HxWx3)."""
+
+    def __init__(self, path: str | Path, static: dict):
+        self.path = Path(path)
+        self.static = static
+        self._atomic = atomic_path(self.path)
+        self._file: h5py.File | None = None
+        self._count = 0
+
+    def __enter__(self) -> "EpisodeWriter":
+        tmp = self._atomic.__enter__()
+        self._file = h5py.File(tmp, "w")
+        self._file.attrs["schema_version"] = schema.SCHEMA_VERSION
+        for key, value in self.static.items():
+            self._write_static(key, value)
+        return self
+
+    def _write_static(self, key: str, value) -> None:
+        if isinstance(value, str):
+            self._file.create_dataset(key, data=value, dtype=STR)
+        elif isinstance(value, (list, tuple)) and value and isinstance(value[0], str):
+            self._file.create_dataset(key, data=list(value), dtype=STR)
+        elif isinstance(value, dict):
+            self._file.create_dataset(key, data=json.dumps(value, sort_keys=True), dtype=STR)
+        else:
+            self._file.create_dataset(key, data=np.asarray(value))
+
+    def append(self, frame: dict) -> None:
+        for key, value in frame.items():
+            if isinstance(value, str):
+                self._append_str(key, value)
+                continue
+            value = np.asarray(value)
+            if key not in self._file:
+                self._create(key, value)
+            ds = self._file[key]
+            ds.resize(self._count + 1, axis=0)
+            ds[self._count] = value
+        self._count += 1
+
+    def _create(self, key: str, value: np.ndarray) -> None:
+        image_like = value.ndim >= 2 and value.size >= 1024
+        kwargs = {"compression": "lzf"} if image_like else {"compression": "gzip", "compression_opts": 4}
+        if value.dtype.kind == "f" and not image_like:
+            kwargs["shuffle"] = True
+        self._file.create_dataset(key, shape=(0, *value.shape), maxshape=(None, *value.shape),
+                                  dtype=value.dtype, chunks=(schema.IMAGE_CHUNK_FRAMES if image_like else 256,
+                                                             *value.shape), **kwargs)
+
+    def _append_str(self, key: str, value: str) -> None:
+        if key not in self._file:
+            self._file.create_dataset(key, shape=(0,), maxshape=(None,), dtype=STR, chunks=(256,))
+        ds = self._file[key]
+        ds.resize(self._count + 1, axis=0)
+        ds[self._count] = value
+
+    @property
+    def file(self) -> h5py.File:
+        return self._file
+
+    def write_final(self, key: str, value) -> None:
+        """Datasets known only at the end (episode metrics, success flags)."""
+        if key in self._file:
+            del self._file[key]
+        self._write_static(key, value)
+
+    @property
+    def frames_written(self) -> int:
+        return self._count
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        self._file.close()
+        self._atomic.__exit__(exc_type, exc, tb)

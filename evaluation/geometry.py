@@ -1,0 +1,57 @@
+"""Small rigid-body helpers on (pos, wxyz quat, half extents) boxes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+Z_UP = np.array([0.0, 0.0, 1.0])
+
+
+def rotation(quat: np.ndarray) -> np.ndarray:
+    """3x3 rotation matrix of a wxyz quaternion (normalised first)."""
+    w, x, y, z = np.asarray(quat, dtype=float) / np.linalg.norm(quat)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def angle_deg(a: np.ndarray, b: np.ndarray) -> float:
+    """Angle between two vectors in degrees."""
+    c = float(np.dot(a, b) / (np.linalg.norm(a) * np.linalg.norm(b)))
+    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+
+
+def tilt_deg(quat: np.ndarray, local_axis: np.ndarray) -> float:
+    """Angle between an object's local axis (in world) and world +z."""
+    return angle_deg(rotation(quat) @ local_axis, Z_UP)
+
+
+def vertical_half_extent(quat: np.ndarray, half_extents: np.ndarray) -> float:
+    """Half height of a rotated box: its world z extent around the centre."""
+    return float(np.abs(rotation(quat)[2]) @ np.asarray(half_extents, dtype=float))
+
+
+def to_local(point: np.ndarray, pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    """A world point in a body's frame."""
+    return rotation(quat).T @ (np.asarray(point, dtype=float) - pos)
+
+
+def box_distance(point: np.ndarray, pos: np.ndarray, quat: np.ndarray, half_extents: np.ndarray) -> float:
+    """Distance from a world point to an oriented box (0 inside)."""
+    local = to_local(point, pos, quat)
+    return float(np.linalg.norm(local - np.clip(local, -half_extents, half_extents)))
+
+
+def axis_extent(local_axis: np.ndarray, half_extents: np.ndarray) -> float:
+    """How far the box surface lies from the centre along a unit local axis (box support value)."""
+    return float(np.abs(local_axis) @ half_extents)
+
+
+def masked_distance(a: np.ndarray, b: np.ndarray, axes: str) -> float:
+    """Distance between two points over 'xy', 'xyz' or 'z'."""
+    sel = {"xy": slice(0, 2), "xyz": slice(0, 3), "z": slice(2, 3)}[axes]
+    return float(np.linalg.norm(np.asarray(a, dtype=float)[sel] - np.asarray(b, dtype=float)[sel]))

@@ -1,0 +1,73 @@
+"""Kinematic grasp stability index (paper, "Grasp diagnostics"): G = L * H * M * Q * A per object.
+
+    L  1 if the object is at least lift_min above its initial height, else 0
+    H  1 held, 0.35 lifted and stable, 0.15 lifted only, 0 otherwise
+    M  exp(-(|v| / sigma_v + |w| / sigma_w) / 2)
+    Q  0.75 + 0.25 min(1, d / hold_min_s) while held (d: current hold duration), else 1
+    A  1 - min(1, s / max_slips) (s: slip events so far; a slip starts when the object moves relative
+       to the nearest palm faster than slip_speed while held)
+"Held" is the shared proxy: lifted and touching a hand, or the palm centre within hand_max_dist.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from evaluation.args import ArgReader
+from evaluation.grammar import CompileScope
+from evaluation.state import TaskContext
+from evaluation.step import EvalStep
+
+DEFAULTS = {"lift_min": 0.02, "hand_max_dist": 0.12, "stable_lin_vel": 0.05, "stable_ang_vel": 0.5,
+            "sigma_v": 0.25, "sigma_w": 2.0, "hold_min_s": 0.5, "slip_speed": 0.1, "max_slips": 3.0}
+
+
+class GraspMonitor:
+    def __init__(self, raw: Any, context: TaskContext, source: str | None = None, field: str = "metrics.grasp"):
+        a = ArgReader("grasp", raw, CompileScope(context, (), source), field)
+        self.objects = a.objects("objects")
+        self.cfg = {k: a.number(k, v, lo=0.0) for k, v in DEFAULTS.items()}
+        for k in ("sigma_v", "sigma_w", "hold_min_s", "max_slips"):
+            if self.cfg[k] <= 0:
+                raise a.error(k, "a positive number", self.cfg[k])
+        a.done()
+        self.reset()
+
+    def reset(self) -> None:
+        n = len(self.objects)
+        self.hold_s = np.zeros(n)
+        self.slips = np.zeros(n, dtype=int)
+        self.slipping = np.zeros(n, dtype=bool)
+        self.prev_rel: list[np.ndarray | None] = [None] * n
+
+    def _palm_offset(self, s: EvalStep, pos: np.ndarray) -> np.ndarray | None:
+        rels = [pos - np.asarray(p, float) for p in s.state.hands.values()]
+        return min(rels, key=np.linalg.norm) if rels else None
+
+    def update(self, s: EvalStep) -> np.ndarray:
+        c = self.cfg
+        scores = np.zeros(len(self.objects))
+        for i, name in enumerate(self.objects):
+            o = s.obj(name)
+            pos = np.asarray(o.pos, dtype=float)
+            v, w = float(np.linalg.norm(o.lin_vel)), float(np.linalg.norm(o.ang_vel))
+            lifted = pos[2] - s.initial_obj(name).pos[2] >= c["lift_min"]
+            held = lifted and s.held_by(name, "any", c["hand_max_dist"])
+            stable = v <= c["stable_lin_vel"] and w <= c["stable_ang_vel"]
+            self.hold_s[i] = self.hold_s[i] + s.dt if held else 0.0
+            rel = self._palm_offset(s, pos) if held else None
+            slipping = False
+            if rel is not None and self.prev_rel[i] is not None:
+                slipping = float(np.linalg.norm(rel - self.prev_rel[i])) / s.dt > c["slip_speed"]
+            self.slips[i] += int(slipping and not self.slipping[i])
+            self.slipping[i], self.prev_rel[i] = slipping, rel
+            big_l = 1.0 if lifted else 0.0
+            big_h = 1.0 if held else 0.35 if lifted and stable else 0.15 if lifted else 0.0
+            big_m = math.exp(-0.5 * (v / c["sigma_v"] + w / c["sigma_w"]))
+            big_q = 0.75 + 0.25 * min(1.0, self.hold_s[i] / c["hold_min_s"]) if held else 1.0
+            big_a = 1.0 - min(1.0, self.slips[i] / c["max_slips"])
+            scores[i] = big_l * big_h * big_m * big_q * big_a
+        return scores

@@ -1,0 +1,789 @@
+"""Declarative arm / hand / embodiment descriptions: dataclasses, YAML loading and validation.
+
+Catalog layout (``sim/catalog``): ``arms/<name>.yaml``, ``hands/<name>.yaml``,
+``embodiments/<name>.yaml``. Every file is plain data (read with ``yaml.safe_load``); the builder in
+``builder.py`` turns descriptions into MuJoCo bodies and ``kinematics.py`` into a Pinocchio model.
+
+Conventions (all lengths in metres, angles in radians):
+
+* Arm joints follow URDF: each joint has an ``origin`` (xyz + rpy, parent link frame -> joint frame,
+  which is also the child link frame) and an ``axis`` in the joint frame. ``flange`` is the tool
+  flange frame in the last link's frame, with +z pointing out of the flange.
+* Hands are described for the RIGHT side. Hand base = flange frame; +z along the extended fingers,
+  +y the palm normal (the side fingers curl toward), +x lateral (thumb on -x for a right hand).
+  The left hand is mirrored from it (see ``mirror.py``).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+CATALOG_DIR = Path(__file__).resolve().parent.parent / "catalog"
+ARMS_DIR = CATALOG_DIR / "arms"
+HANDS_DIR = CATALOG_DIR / "hands"
+EMBODIMENTS_DIR = CATALOG_DIR / "embodiments"
+
+GEOM_TYPES = ("capsule", "box", "sphere", "cylinder", "ellipsoid")
+TACTILE_GROUPINGS = ("side_shared", "side_specific", "per_finger")
+
+
+class DescriptionError(ValueError):
+    """A catalog file is missing a field or holds a value of the wrong shape."""
+
+
+# --------------------------------------------------------------------------------------------
+# small math helpers shared by the builder and kinematics
+# --------------------------------------------------------------------------------------------
+
+def rpy_to_matrix(rpy) -> np.ndarray:
+    """URDF fixed-axis roll-pitch-yaw: R = Rz(yaw) @ Ry(pitch) @ Rx(roll)."""
+    r, p, y = (float(v) for v in rpy)
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array([
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ])
+
+
+def frame_from_axes(z, y) -> np.ndarray:
+    """Rotation whose z column is ``z`` and whose y column is ``y`` orthogonalised against it."""
+    z = np.asarray(z, float)
+    z = z / np.linalg.norm(z)
+    y = np.asarray(y, float)
+    y = y - z * (y @ z)
+    n = np.linalg.norm(y)
+    if n < 1e-9:
+        raise DescriptionError(f"frame axes z={z} and y={y} are parallel")
+    y = y / n
+    x = np.cross(y, z)
+    return np.column_stack([x, y, z])
+
+
+def mat_to_quat(R: np.ndarray) -> np.ndarray:
+    """Rotation matrix -> unit quaternion (w, x, y, z), w >= 0."""
+    import mujoco
+
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, np.ascontiguousarray(R, dtype=float).reshape(9))
+    if q[0] < 0:
+        q = -q
+    return q
+
+
+def quat_to_mat(q) -> np.ndarray:
+    import mujoco
+
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, np.asarray(q, float))
+    return R.reshape(3, 3)
+
+
+@dataclass(frozen=True)
+class Transform:
+    """Rigid transform (rotation matrix + translation) used for origins and mounts."""
+
+    pos: np.ndarray
+    rot: np.ndarray
+
+    @staticmethod
+    def identity() -> "Transform":
+        return Transform(np.zeros(3), np.eye(3))
+
+    def __matmul__(self, other: "Transform") -> "Transform":
+        return Transform(self.pos + self.rot @ other.pos, self.rot @ other.rot)
+
+    def inverse(self) -> "Transform":
+        return Transform(-self.rot.T @ self.pos, self.rot.T)
+
+    @property
+    def quat(self) -> np.ndarray:
+        return mat_to_quat(self.rot)
+
+
+# --------------------------------------------------------------------------------------------
+# dataclasses
+# --------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class GeomSpec:
+    type: str
+    size: tuple[float, ...]          # MuJoCo sizes (half sizes for box; radius[, half length])
+    pos: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rot: np.ndarray = field(default_factory=lambda: np.eye(3))
+    fromto: np.ndarray | None = None  # capsule / cylinder end points, link frame
+    friction: tuple[float, float, float] | None = None
+    condim: int | None = None
+    rgba: tuple[float, float, float, float] | None = None
+    name: str | None = None
+
+
+@dataclass(frozen=True)
+class Inertial:
+    mass: float
+    com: np.ndarray
+    inertia: np.ndarray   # diagonal (ixx, iyy, izz) about the com, link axes
+
+
+@dataclass(frozen=True)
+class JointSpec:
+    name: str
+    axis: np.ndarray
+    range: tuple[float, float]
+    velocity: float = 3.0            # rad/s, real max joint speed
+    effort: float = 1.0              # N m, real max torque
+    armature: float = 0.0
+    damping: float = 0.0
+    frictionloss: float = 0.0
+
+
+@dataclass(frozen=True)
+class LinkSpec:
+    """A body of the kinematic tree. ``origin`` places it in its parent's frame."""
+
+    name: str
+    parent: str | None
+    origin: Transform
+    joints: tuple[JointSpec, ...]
+    geoms: tuple[GeomSpec, ...]
+    inertial: Inertial
+    finger: str | None = None
+
+
+@dataclass(frozen=True)
+class ArmDescription:
+    name: str
+    display_name: str
+    source: str
+    approximations: str
+    links: tuple[LinkSpec, ...]      # base link first, then one link per joint in chain order
+    flange: Transform                # in the last link frame, +z out of the flange
+    home_seed: dict[str, np.ndarray]  # side -> elbow-up seed for the home IK
+    servo_error_at_full_effort: float
+    contact_exclude: tuple[tuple[str, str], ...]
+    path: Path
+
+    @property
+    def joints(self) -> list[JointSpec]:
+        return [j for link in self.links for j in link.joints]
+
+    @property
+    def dof(self) -> int:
+        return len(self.joints)
+
+
+@dataclass(frozen=True)
+class ActuatorSpec:
+    name: str
+    joint: str
+    effort: float
+    velocity: float
+    kp: float | None = None
+    kv: float | None = None
+
+
+@dataclass(frozen=True)
+class CouplingSpec:
+    joint: str       # follower (mimic) joint
+    master: str
+    polycoef: tuple[float, ...]   # q_joint = c0 + c1 q_master + c2 q_master^2 + ...
+
+
+@dataclass(frozen=True)
+class TactilePad:
+    center: np.ndarray
+    normal: np.ndarray
+    axis: np.ndarray
+    length: float
+    width: float
+    curvature_radius: float
+
+
+@dataclass(frozen=True)
+class TactileSite:
+    name: str
+    finger: str
+    group: str
+    attach_body: str
+    pad: TactilePad
+
+
+@dataclass(frozen=True)
+class TactileSpec:
+    grouping: str
+    normal_convention: str
+    resolution: int
+    sites: tuple[TactileSite, ...]
+    pad_friction: tuple[float, float, float]
+    pad_condim: int
+
+
+@dataclass(frozen=True)
+class GraspProbe:
+    """A cylinder the hand must be able to hold (used by the tests, hand frame)."""
+
+    radius: float
+    half_length: float
+    mass: float
+    pos: np.ndarray
+    axis: np.ndarray
+    close: dict[str, float]     # actuator -> closing target
+
+
+@dataclass(frozen=True)
+class HandDescription:
+    name: str
+    display_name: str
+    source: str
+    assumptions: str
+    mount: Transform               # hand base in the flange frame
+    links: tuple[LinkSpec, ...]    # palm first
+    actuators: tuple[ActuatorSpec, ...]
+    couplings: tuple[CouplingSpec, ...]
+    wrist_site: Transform
+    tactile: TactileSpec
+    home: dict[str, float]         # joint -> open-hand angle (missing joints: 0 clipped to range)
+    fingers: tuple[str, ...]
+    grasp_probe: GraspProbe | None
+    contact_exclude: tuple[tuple[str, str], ...]
+    servo_error_at_full_effort: float
+    path: Path
+
+    @property
+    def joints(self) -> list[JointSpec]:
+        return [j for link in self.links for j in link.joints]
+
+    @property
+    def mass(self) -> float:
+        return sum(link.inertial.mass for link in self.links)
+
+    def joint(self, name: str) -> JointSpec:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise KeyError(name)
+
+
+@dataclass(frozen=True)
+class CameraSpec:
+    name: str
+    fovy: float
+    pos: np.ndarray | None = None
+    target: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class EmbodimentDescription:
+    name: str
+    display_name: str
+    arm: ArmDescription
+    hand: HandDescription
+    mounts: dict[str, Transform]            # side -> arm base in world
+    home_wrist: Transform                    # right wrist-site home pose in world (left mirrored)
+    home_arm: dict[str, np.ndarray] | None   # optional explicit arm home per side
+    home_seed: dict[str, np.ndarray] | None  # optional IK seeds per side (else the arm file's)
+    torso: dict[str, Any]
+    cameras: dict[str, CameraSpec]
+    path: Path
+
+
+# --------------------------------------------------------------------------------------------
+# parsing helpers
+# --------------------------------------------------------------------------------------------
+
+class _Ctx:
+    """Carries the file path and a field path for error messages."""
+
+    def __init__(self, path: Path, where: str = ""):
+        self.path = path
+        self.where = where
+
+    def sub(self, key) -> "_Ctx":
+        return _Ctx(self.path, f"{self.where}.{key}" if self.where else str(key))
+
+    def fail(self, msg: str):
+        raise DescriptionError(f"{self.path}: field '{self.where}': {msg}")
+
+
+def _get(d: dict, key: str, ctx: _Ctx, default=Ellipsis):
+    if not isinstance(d, dict):
+        ctx.fail(f"expected a mapping, got {type(d).__name__}")
+    if key not in d:
+        if default is Ellipsis:
+            ctx.sub(key).fail("missing")
+        return default
+    return d[key]
+
+
+def _vec(v, n: int, ctx: _Ctx) -> np.ndarray:
+    try:
+        a = np.asarray([float(x) for x in v], dtype=float)
+    except (TypeError, ValueError):
+        ctx.fail(f"expected a list of {n} numbers, got {v!r}")
+    if a.shape != (n,):
+        ctx.fail(f"expected a list of {n} numbers, got {len(a)}")
+    return a
+
+
+def _num(v, ctx: _Ctx, positive: bool = False) -> float:
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        ctx.fail(f"expected a number, got {v!r}")
+    if positive and not x > 0:
+        ctx.fail(f"expected a positive number, got {x}")
+    return x
+
+
+def _transform(d: dict | None, ctx: _Ctx) -> Transform:
+    """``{xyz, rpy}`` or ``{xyz, z, y}`` (frame from axes) or ``{xyz, quat}`` (w, x, y, z)."""
+    if d is None:
+        return Transform.identity()
+    pos = _vec(d.get("xyz", [0, 0, 0]), 3, ctx.sub("xyz"))
+    if "rpy" in d:
+        rot = rpy_to_matrix(_vec(d["rpy"], 3, ctx.sub("rpy")))
+    elif "z" in d:
+        rot = frame_from_axes(_vec(d["z"], 3, ctx.sub("z")), _vec(_get(d, "y", ctx), 3, ctx.sub("y")))
+    elif "quat" in d:
+        rot = quat_to_mat(_vec(d["quat"], 4, ctx.sub("quat")) / np.linalg.norm(d["quat"]))
+    else:
+        rot = np.eye(3)
+    return Transform(pos, rot)
+
+
+def _geom(d: dict, ctx: _Ctx, defaults: dict) -> GeomSpec:
+    gtype = _get(d, "type", ctx)
+    if gtype not in GEOM_TYPES:
+        ctx.sub("type").fail(f"expected one of {GEOM_TYPES}, got {gtype!r}")
+    fromto = None
+    if "fromto" in d:
+        fromto = _vec(d["fromto"], 6, ctx.sub("fromto"))
+        size = (_num(_get(d, "radius", ctx), ctx.sub("radius"), positive=True),)
+        pos, rot = np.zeros(3), np.eye(3)
+    else:
+        size = tuple(float(s) for s in _get(d, "size", ctx))
+        tf = _transform(d, ctx)
+        pos, rot = tf.pos, tf.rot
+    friction = d.get("friction", defaults.get("friction"))
+    condim = d.get("condim", defaults.get("condim"))
+    rgba = d.get("rgba", defaults.get("rgba"))
+    return GeomSpec(
+        type=gtype, size=size, pos=pos, rot=rot, fromto=fromto,
+        friction=tuple(float(x) for x in friction) if friction is not None else None,
+        condim=int(condim) if condim is not None else None,
+        rgba=tuple(float(x) for x in rgba) if rgba is not None else None,
+        name=d.get("name"),
+    )
+
+
+def _geom_volume_inertia(g: GeomSpec) -> tuple[float, np.ndarray, np.ndarray]:
+    """Volume, centre and diagonal unit-density inertia (about its centre, link axes; the
+    orientation of capsules/cylinders is folded in by projecting onto the link axes)."""
+    if g.fromto is not None:
+        a, b = g.fromto[:3], g.fromto[3:]
+        r = g.size[0]
+        L = float(np.linalg.norm(b - a))
+        c = (a + b) / 2
+        u = (b - a) / L if L > 1e-9 else np.array([0, 0, 1.0])
+        if g.type == "capsule":
+            vol = math.pi * r * r * (L + 4 * r / 3)
+            h = L + 2 * r * 0.75   # treat as an equivalent cylinder for the inertia
+        else:
+            vol = math.pi * r * r * L
+            h = L
+        i_ax = 0.5 * r * r
+        i_tr = (3 * r * r + h * h) / 12
+        I = i_tr * np.eye(3) + (i_ax - i_tr) * np.outer(u, u)
+        return vol, c, np.diag(I) * vol
+    s = g.size
+    if g.type == "box":
+        vol = 8 * s[0] * s[1] * s[2]
+        d = np.array([s[1] ** 2 + s[2] ** 2, s[0] ** 2 + s[2] ** 2, s[0] ** 2 + s[1] ** 2]) / 3
+    elif g.type == "sphere":
+        vol = 4 / 3 * math.pi * s[0] ** 3
+        d = np.full(3, 0.4 * s[0] ** 2)
+    elif g.type == "ellipsoid":
+        vol = 4 / 3 * math.pi * s[0] * s[1] * s[2]
+        d = np.array([s[1] ** 2 + s[2] ** 2, s[0] ** 2 + s[2] ** 2, s[0] ** 2 + s[1] ** 2]) / 5
+    else:  # capsule / cylinder given by size (radius, half length) along the local z
+        r, hl = s[0], s[1]
+        vol = math.pi * r * r * 2 * hl
+        d = np.array([(3 * r * r + 4 * hl * hl) / 12] * 2 + [0.5 * r * r])
+    I = g.rot @ np.diag(d) @ g.rot.T
+    return vol, g.pos, np.abs(np.diag(I)) * vol
+
+
+def _inertial(d: dict, geoms: tuple[GeomSpec, ...], ctx: _Ctx) -> Inertial:
+    """Explicit ``mass`` (+ optional ``com`` and diagonal ``inertia``); what is not given is
+    derived from the collision geometry at uniform density scaled to the stated mass."""
+    mass = _num(_get(d, "mass", ctx), ctx.sub("mass"), positive=True)
+    parts = [_geom_volume_inertia(g) for g in geoms]
+    vol = sum(p[0] for p in parts)
+    if vol > 0:
+        com_geo = sum(p[0] * p[1] for p in parts) / vol
+        rho = mass / vol
+        I = np.zeros(3)
+        for v, c, Ig in parts:
+            r = c - com_geo
+            I += rho * Ig + rho * v * (r @ r - r * r)   # parallel axis (diagonal terms)
+    else:
+        com_geo = np.zeros(3)
+        I = np.full(3, mass * 1e-4)
+    com = _vec(d["com"], 3, ctx.sub("com")) if "com" in d else com_geo
+    inertia = _vec(d["inertia"], 3, ctx.sub("inertia")) if "inertia" in d else I
+    inertia = np.maximum(inertia, 1e-7)
+    return Inertial(mass, com, inertia)
+
+
+def _joint(d: dict, ctx: _Ctx, defaults: dict) -> JointSpec:
+    name = str(_get(d, "name", ctx))
+    rng = _vec(_get(d, "range", ctx), 2, ctx.sub("range"))
+    if not rng[0] < rng[1]:
+        ctx.sub("range").fail(f"lower bound must be below upper bound, got {rng.tolist()}")
+    axis = _vec(d.get("axis", defaults.get("axis", [0, 0, 1])), 3, ctx.sub("axis"))
+    axis = axis / np.linalg.norm(axis)
+    g = lambda k, dflt: _num(d.get(k, defaults.get(k, dflt)), ctx.sub(k))  # noqa: E731
+    return JointSpec(
+        name=name, axis=axis, range=(float(rng[0]), float(rng[1])),
+        velocity=g("velocity", 3.0), effort=g("effort", 1.0), armature=g("armature", 0.0),
+        damping=g("damping", 0.0), frictionloss=g("frictionloss", 0.0),
+    )
+
+
+def _excludes(data: dict, ctx: _Ctx, link_names: set[str]) -> tuple[tuple[str, str], ...]:
+    out = []
+    for i, pair in enumerate(data.get("contact_exclude", []) or []):
+        c = ctx.sub(f"contact_exclude[{i}]")
+        if not isinstance(pair, list) or len(pair) != 2:
+            c.fail("expected a pair of link names")
+        for n in pair:
+            if n not in link_names:
+                c.fail(f"{n!r} is not a link")
+        out.append((str(pair[0]), str(pair[1])))
+    return tuple(out)
+
+
+def _read_yaml(path: Path) -> dict:
+    with open(path, encoding="utf-8") as f:
+        data = yaml.safe_load(f)
+    if not isinstance(data, dict):
+        raise DescriptionError(f"{path}: expected a mapping at the top level")
+    return data
+
+
+def _names(folder: Path) -> list[str]:
+    return sorted(p.stem for p in folder.glob("*.yaml"))
+
+
+def _resolve(folder: Path, name: str, kind: str) -> Path:
+    path = folder / f"{name}.yaml"
+    if not path.is_file():
+        raise ValueError(f"unknown {kind} {name!r}; valid: {', '.join(_names(folder))}")
+    return path
+
+
+# --------------------------------------------------------------------------------------------
+# arms
+# --------------------------------------------------------------------------------------------
+
+def arm_names() -> list[str]:
+    return _names(ARMS_DIR)
+
+
+@functools.lru_cache(maxsize=None)
+def load_arm(name: str) -> ArmDescription:
+    path = _resolve(ARMS_DIR, name, "arm")
+    data = _read_yaml(path)
+    ctx = _Ctx(path)
+    jdefaults = data.get("joint_defaults", {}) or {}
+    gdefaults = data.get("geom_defaults", {}) or {}
+    base = _get(data, "base", ctx)
+    bctx = ctx.sub("base")
+    base_geoms = tuple(_geom(g, bctx.sub(f"geoms[{i}]"), gdefaults) for i, g in enumerate(base.get("geoms", [])))
+    links = [LinkSpec(
+        name=str(_get(base, "link", bctx)), parent=None, origin=Transform.identity(), joints=(),
+        geoms=base_geoms, inertial=_inertial(base, base_geoms, bctx),
+    )]
+    chain = _get(data, "chain", ctx)
+    if not isinstance(chain, list) or not chain:
+        ctx.sub("chain").fail("expected a non-empty list of joints")
+    flange_raw = _get(data, "flange", ctx)
+    for i, entry in enumerate(chain):
+        c = ctx.sub(f"chain[{i}]")
+        link_raw = _get(entry, "link", c)
+        if "segment_radius" in link_raw:
+            # shorthand: a capsule from this joint to the next joint origin (or the flange) plus a
+            # joint-housing cylinder along the joint axis
+            nxt = chain[i + 1]["origin"] if i + 1 < len(chain) else flange_raw
+            end = [float(v) for v in nxt.get("xyz", [0, 0, 0])]
+            r = float(link_raw["segment_radius"])
+            extra = list(link_raw.get("geoms", []))
+            if np.linalg.norm(end) > 1e-3:
+                extra.insert(0, {"type": "capsule", "fromto": [0, 0, 0] + end, "radius": r})
+            ax = np.asarray(entry.get("axis", [0, 0, 1]), float)
+            h = float(link_raw.get("housing_half_length", r))
+            extra.append({"type": "cylinder", "fromto": list(-ax * h) + list(ax * h), "radius": r * 1.08,
+                          "rgba": link_raw.get("housing_rgba", [0.3, 0.3, 0.32, 1])})
+            link_raw = dict(link_raw, geoms=extra)
+            entry = dict(entry, link=link_raw)
+        joint = _joint(entry, c, jdefaults)
+        link = _get(entry, "link", c)
+        lctx = c.sub("link")
+        geoms = tuple(_geom(g, lctx.sub(f"geoms[{k}]"), gdefaults) for k, g in enumerate(link.get("geoms", [])))
+        links.append(LinkSpec(
+            name=str(_get(link, "name", lctx)), parent=links[-1].name,
+            origin=_transform(_get(entry, "origin", c), c.sub("origin")), joints=(joint,),
+            geoms=geoms, inertial=_inertial(link, geoms, lctx),
+        ))
+    dof = len(chain)
+    raw = _get(data, "home_seed", ctx)
+    if isinstance(raw, dict):
+        seed = {s: _vec(_get(raw, s, ctx.sub("home_seed")), dof, ctx.sub(f"home_seed.{s}")) for s in ("left", "right")}
+    else:
+        v = _vec(raw, dof, ctx.sub("home_seed"))
+        seed = {"left": v, "right": v}
+    return ArmDescription(
+        name=str(data.get("name", name)), display_name=str(data.get("display_name", name)),
+        source=str(_get(data, "source", ctx)), approximations=str(data.get("approximations", "")),
+        links=tuple(links), flange=_transform(_get(data, "flange", ctx), ctx.sub("flange")),
+        home_seed=seed,
+        servo_error_at_full_effort=_num(data.get("servo_error_at_full_effort", 0.05), ctx.sub("servo_error_at_full_effort"), True),
+        contact_exclude=_excludes(data, ctx, {link.name for link in links}),
+        path=path,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# hands
+# --------------------------------------------------------------------------------------------
+
+def hand_names() -> list[str]:
+    return _names(HANDS_DIR)
+
+
+def _hand_links(data: dict, ctx: _Ctx) -> tuple[list[LinkSpec], list[str]]:
+    jdefaults = data.get("joint_defaults", {}) or {}
+    gdefaults = data.get("geom_defaults", {}) or {}
+    palm = _get(data, "palm", ctx)
+    pctx = ctx.sub("palm")
+    pgeoms = tuple(_geom(g, pctx.sub(f"geoms[{i}]"), gdefaults) for i, g in enumerate(_get(palm, "geoms", pctx)))
+    palm_link = LinkSpec(
+        name=str(_get(palm, "name", pctx)), parent=None, origin=Transform.identity(), joints=(),
+        geoms=pgeoms, inertial=_inertial(palm, pgeoms, pctx),
+    )
+    links = [palm_link]
+    fingers = []
+    by_name = {palm_link.name: palm_link}
+    for fi, finger in enumerate(_get(data, "fingers", ctx)):
+        fctx = ctx.sub(f"fingers[{fi}]")
+        fname = str(_get(finger, "name", fctx))
+        fingers.append(fname)
+        parent = str(finger.get("parent", palm_link.name))
+        prev_len = None
+        for li, link in enumerate(_get(finger, "links", fctx)):
+            lctx = fctx.sub(f"links[{li}]")
+            lname = str(_get(link, "name", lctx))
+            if lname in by_name:
+                lctx.sub("name").fail(f"duplicate link name {lname!r}")
+            if parent not in by_name:
+                lctx.fail(f"parent link {parent!r} is not defined before it")
+            origin = _transform(link.get("origin"), lctx.sub("origin"))
+            if "origin" not in link or "xyz" not in link["origin"]:
+                if prev_len is None:
+                    lctx.sub("origin").fail("the first link of a finger needs origin.xyz on its parent")
+                origin = Transform(np.array([0, 0, prev_len]), origin.rot)
+            joints = tuple(_joint(j, lctx.sub(f"joints[{k}]"), jdefaults) for k, j in enumerate(link.get("joints", [])))
+            length = _num(link.get("length", 0.0), lctx.sub("length"))
+            geoms = [_geom(g, lctx.sub(f"geoms[{k}]"), gdefaults) for k, g in enumerate(link.get("geoms", []))]
+            if "radius" in link and length > 0:
+                # default phalanx: a capsule along +z from the joint to the next joint
+                r = _num(link["radius"], lctx.sub("radius"), positive=True)
+                geoms.insert(0, _geom({"type": "capsule", "fromto": [0, 0, 0, 0, 0, length], "radius": r},
+                                      lctx, gdefaults))
+            geoms_t = tuple(geoms)
+            spec = LinkSpec(name=lname, parent=parent, origin=origin, joints=joints, geoms=geoms_t,
+                            inertial=_inertial(link, geoms_t, lctx), finger=fname)
+            links.append(spec)
+            by_name[lname] = spec
+            parent = lname
+            prev_len = length
+    names = [j.name for link in links for j in link.joints]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        ctx.fail(f"duplicate joint names {sorted(dup)}")
+    return links, fingers
+
+
+def _tactile(data: dict, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
+    t = _get(data, "tactile", ctx)
+    tctx = ctx.sub("tactile")
+    grouping = _get(t, "grouping", tctx)
+    if grouping not in TACTILE_GROUPINGS:
+        tctx.sub("grouping").fail(f"expected one of {TACTILE_GROUPINGS}, got {grouping!r}")
+    sites = []
+    for i, s in enumerate(_get(t, "sites", tctx)):
+        sctx = tctx.sub(f"sites[{i}]")
+        body = str(_get(s, "attach_body", sctx))
+        if body not in link_names:
+            sctx.sub("attach_body").fail(f"{body!r} is not a link of this hand")
+        finger = str(_get(s, "finger", sctx))
+        if finger not in fingers:
+            sctx.sub("finger").fail(f"{finger!r} is not one of the fingers {fingers}")
+        p = _get(s, "pad", sctx)
+        pctx = sctx.sub("pad")
+        normal = _vec(_get(p, "normal", pctx), 3, pctx.sub("normal"))
+        axis = _vec(_get(p, "axis", pctx), 3, pctx.sub("axis"))
+        normal, axis = normal / np.linalg.norm(normal), axis / np.linalg.norm(axis)
+        if abs(normal @ axis) > 1e-6:
+            pctx.fail("pad normal and axis must be orthogonal")
+        pad = TactilePad(
+            center=_vec(_get(p, "center", pctx), 3, pctx.sub("center")), normal=normal, axis=axis,
+            length=_num(_get(p, "length", pctx), pctx.sub("length"), True),
+            width=_num(_get(p, "width", pctx), pctx.sub("width"), True),
+            curvature_radius=_num(_get(p, "curvature_radius", pctx), pctx.sub("curvature_radius"), True),
+        )
+        sites.append(TactileSite(str(_get(s, "name", sctx)), finger, str(_get(s, "group", sctx)), body, pad))
+    covered = {s.finger for s in sites}
+    if covered != set(fingers):
+        tctx.sub("sites").fail(f"expected one site per finger {fingers}, got fingers {sorted(covered)}")
+    return TactileSpec(
+        grouping=grouping, normal_convention=str(t.get("normal_convention", "inward")),
+        resolution=int(t.get("resolution", 240)), sites=tuple(sites),
+        pad_friction=tuple(float(x) for x in t.get("pad_friction", [1.2, 0.02, 0.002])),
+        pad_condim=int(t.get("pad_condim", 4)),
+    )
+
+
+@functools.lru_cache(maxsize=None)
+def load_hand(name: str) -> HandDescription:
+    path = _resolve(HANDS_DIR, name, "hand")
+    data = _read_yaml(path)
+    ctx = _Ctx(path)
+    links, fingers = _hand_links(data, ctx)
+    joint_names = {j.name for link in links for j in link.joints}
+    actuators = []
+    for i, a in enumerate(_get(data, "actuators", ctx)):
+        actx = ctx.sub(f"actuators[{i}]")
+        jn = str(_get(a, "joint", actx))
+        if jn not in joint_names:
+            actx.sub("joint").fail(f"{jn!r} is not a joint of this hand")
+        jspec = next(j for link in links for j in link.joints if j.name == jn)
+        actuators.append(ActuatorSpec(
+            name=str(a.get("name", jn)), joint=jn,
+            effort=_num(a.get("effort", jspec.effort), actx.sub("effort"), True),
+            velocity=_num(a.get("velocity", jspec.velocity), actx.sub("velocity"), True),
+            kp=float(a["kp"]) if "kp" in a else None, kv=float(a["kv"]) if "kv" in a else None,
+        ))
+    couplings = []
+    for i, c in enumerate(data.get("couplings", []) or []):
+        cctx = ctx.sub(f"couplings[{i}]")
+        jn, mn = str(_get(c, "joint", cctx)), str(_get(c, "master", cctx))
+        for k, n in (("joint", jn), ("master", mn)):
+            if n not in joint_names:
+                cctx.sub(k).fail(f"{n!r} is not a joint of this hand")
+        coef = [float(x) for x in _get(c, "polycoef", cctx)]
+        if not 1 <= len(coef) <= 5:
+            cctx.sub("polycoef").fail("expected 1 to 5 coefficients")
+        couplings.append(CouplingSpec(jn, mn, tuple(coef + [0.0] * (5 - len(coef)))))
+    driven = {a.joint for a in actuators} | {c.joint for c in couplings}
+    free = joint_names - driven
+    if free:
+        ctx.fail(f"joints {sorted(free)} are neither actuated nor coupled")
+    both = {a.joint for a in actuators} & {c.joint for c in couplings}
+    if both:
+        ctx.fail(f"joints {sorted(both)} are both actuated and coupled")
+    home = {str(k): float(v) for k, v in (data.get("home") or {}).items()}
+    for k in home:
+        if k not in joint_names:
+            ctx.sub("home").fail(f"{k!r} is not a joint of this hand")
+    probe = None
+    if "grasp_probe" in data:
+        g = data["grasp_probe"]
+        gctx = ctx.sub("grasp_probe")
+        close = {str(k): float(v) for k, v in _get(g, "close", gctx).items()}
+        act_names = {a.name for a in actuators}
+        for k in close:
+            if k not in act_names:
+                gctx.sub("close").fail(f"{k!r} is not an actuator of this hand")
+        probe = GraspProbe(
+            radius=_num(_get(g, "radius", gctx), gctx.sub("radius"), True),
+            half_length=_num(_get(g, "half_length", gctx), gctx.sub("half_length"), True),
+            mass=_num(_get(g, "mass", gctx), gctx.sub("mass"), True),
+            pos=_vec(_get(g, "pos", gctx), 3, gctx.sub("pos")),
+            axis=_vec(g.get("axis", [1, 0, 0]), 3, gctx.sub("axis")),
+            close=close,
+        )
+    return HandDescription(
+        name=str(data.get("name", name)), display_name=str(data.get("display_name", name)),
+        source=str(_get(data, "source", ctx)), assumptions=str(data.get("assumptions", "")),
+        mount=_transform(data.get("mount"), ctx.sub("mount")), links=tuple(links),
+        actuators=tuple(actuators), couplings=tuple(couplings),
+        wrist_site=_transform(_get(data, "wrist_site", ctx), ctx.sub("wrist_site")),
+        tactile=_tactile(data, ctx, {link.name for link in links}, fingers),
+        home=home, fingers=tuple(fingers), grasp_probe=probe,
+        contact_exclude=_excludes(data, ctx, {link.name for link in links}),
+        servo_error_at_full_effort=_num(data.get("servo_error_at_full_effort", 0.1), ctx.sub("servo_error_at_full_effort"), True),
+        path=path,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# embodiments
+# --------------------------------------------------------------------------------------------
+
+CAMERA_NAMES = ("chest", "overhead", "stereo_left", "stereo_right", "left_wrist", "right_wrist")
+DEFAULT_FOVY = {"chest": 70.0, "overhead": 60.0, "stereo_left": 60.0, "stereo_right": 60.0,
+                "left_wrist": 80.0, "right_wrist": 80.0}
+
+
+def embodiment_names() -> list[str]:
+    """Names of the embodiment files in ``sim/catalog/embodiments``."""
+    return _names(EMBODIMENTS_DIR)
+
+
+@functools.lru_cache(maxsize=None)
+def load_embodiment(name: str) -> EmbodimentDescription:
+    path = _resolve(EMBODIMENTS_DIR, name, "embodiment")
+    data = _read_yaml(path)
+    ctx = _Ctx(path)
+    arm = load_arm(str(_get(data, "arm", ctx)))
+    hand = load_hand(str(_get(data, "hand", ctx)))
+    mount = _get(data, "mount", ctx)
+    mounts = {side: _transform(_get(mount, side, ctx.sub("mount")), ctx.sub(f"mount.{side}"))
+              for side in ("left", "right")}
+    home = _get(data, "home", ctx)
+    hctx = ctx.sub("home")
+    home_wrist = _transform(_get(home, "right_wrist", hctx), hctx.sub("right_wrist"))
+    home_arm = None
+    if "arm" in home:
+        home_arm = {s: _vec(_get(home["arm"], s, hctx.sub("arm")), arm.dof, hctx.sub(f"arm.{s}"))
+                    for s in ("left", "right")}
+    home_seed = None
+    if "seed" in home:
+        home_seed = {s: _vec(_get(home["seed"], s, hctx.sub("seed")), arm.dof, hctx.sub(f"seed.{s}"))
+                     for s in ("left", "right")}
+    cams = data.get("cameras", {}) or {}
+    unknown = set(cams) - set(CAMERA_NAMES)
+    if unknown:
+        ctx.sub("cameras").fail(f"unknown cameras {sorted(unknown)}; valid: {list(CAMERA_NAMES)}")
+    cameras = {}
+    for cname in CAMERA_NAMES:
+        c = cams.get(cname, {}) or {}
+        cc = ctx.sub(f"cameras.{cname}")
+        cameras[cname] = CameraSpec(
+            name=cname, fovy=_num(c.get("fovy", DEFAULT_FOVY[cname]), cc.sub("fovy"), True),
+            pos=_vec(c["pos"], 3, cc.sub("pos")) if "pos" in c else None,
+            target=_vec(c["target"], 3, cc.sub("target")) if "target" in c else None,
+        )
+    return EmbodimentDescription(
+        name=str(data.get("name", name)), display_name=str(_get(data, "display_name", ctx)),
+        arm=arm, hand=hand, mounts=mounts, home_wrist=home_wrist, home_arm=home_arm, home_seed=home_seed,
+        torso=dict(data.get("torso", {}) or {}), cameras=cameras, path=path,
+    )

@@ -1,0 +1,70 @@
+"""Snapshots of a running scene for the evaluator (`evaluation.state`), read from MjData."""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import mujoco
+import numpy as np
+
+from evaluation.state import ObjectInfo, ObjectState, SceneState, TaskContext
+from sim.scene.builder import Scene
+
+
+class SceneObserver:
+    """Reads object poses/velocities, palm positions and contacts in evaluator terms."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        model = scene.model
+        self._owner = np.full(model.nbody, "", dtype=object)   # body id -> evaluator name
+        for name, bid in scene.object_body_ids.items():
+            self._owner[bid] = name
+        self._owner[model.body("table").id] = "table"
+        for side, layout in scene.layout.sides.items():
+            for body in layout.hand_bodies:
+                self._owner[model.body(body).id] = f"{side}_hand"
+        self._wrist_sites = {side: model.site(l.wrist_site).id for side, l in scene.layout.sides.items()}
+
+    @cached_property
+    def context(self) -> TaskContext:
+        infos = {}
+        for name, obj in self.scene.task.objects.items():
+            infos[name] = ObjectInfo(
+                name=name, half_extents=obj.half_extents,
+                interior_half_extents=None if obj.interior_half_extents is None else np.array(obj.interior_half_extents),
+                interior_offset=None if obj.interior_offset is None else np.array(obj.interior_offset))
+        points = {k: np.asarray(v, dtype=float) for k, v in self.scene.task.points.items()}
+        return TaskContext(objects=infos, zones=self.scene.task.zones, points=points,
+                           table_relative_points=frozenset(points))
+
+    def object_states(self, data: mujoco.MjData, names=None) -> dict[str, ObjectState]:
+        out = {}
+        for name in names or self.scene.object_names:
+            qa, da = self.scene.object_qpos_adr[name], self.scene.object_dof_adr[name]
+            # free-joint qvel is (world linear velocity, body-frame angular velocity)
+            ang_local = data.qvel[da + 3: da + 6]
+            rot = data.xmat[self.scene.object_body_ids[name]].reshape(3, 3)
+            out[name] = ObjectState(pos=data.qpos[qa: qa + 3].copy(), quat=data.qpos[qa + 3: qa + 7].copy(),
+                                    lin_vel=data.qvel[da: da + 3].copy(), ang_vel=rot @ ang_local)
+        return out
+
+    def contacts(self, data: mujoco.MjData) -> frozenset[tuple[str, str]]:
+        model = self.scene.model
+        pairs = set()
+        for c in data.contact[: data.ncon]:
+            a = self._owner[model.geom_bodyid[c.geom1]]
+            b = self._owner[model.geom_bodyid[c.geom2]]
+            if a and b and a != b:
+                pairs.add(tuple(sorted((a, b))))
+        return frozenset(pairs)
+
+    def state(self, data: mujoco.MjData) -> SceneState:
+        return SceneState(
+            time_s=float(data.time),
+            objects=self.object_states(data),
+            joints={},
+            hands={side: data.site_xpos[sid].copy() for side, sid in self._wrist_sites.items()},
+            table_height=self.scene.table_height,
+            contacts=self.contacts(data),
+        )

@@ -1,0 +1,19 @@
+"""TacMap layer of b2d: surface maps, surface-aligned ray casting and tacmap encoding.
+
+Modules: ``pads`` (pad meshes from hand files), ``registry`` (a hand's tactile block),
+``surface`` (surface maps and their .npy assets), ``raycast`` / ``broadphase`` / ``sensor``
+(per-frame sensing), ``quantize`` (the paper's depth encoding), ``heatmap`` (figures) and
+``bench`` (throughput). Nothing here imports Dagster.
+"""
+
+from tactile.pads import PadSpec, build_pad_mesh, parse_pad
+from tactile.quantize import encode_tacmap
+from tactile.registry import SiteSpec, TactileLayout, parse_tactile_block
+from tactile.sensor import TactileFrame, TactileSensor, TactileSite
+from tactile.surface import SurfaceMap, load_surface_map, save_surface_map, surface_map_from_pad
+
+__all__ = [
+    "PadSpec", "build_pad_mesh", "parse_pad", "encode_tacmap", "SiteSpec", "TactileLayout",
+    "parse_tactile_block", "TactileFrame", "TactileSensor", "TactileSite", "SurfaceMap",
+    "load_surface_map", "save_surface_map", "surface_map_from_pad",
+]

@@ -1,0 +1,54 @@
+"""Record demonstrations for a setting: one raw recording per episode, each in its own scene
+sample; a failing episode is logged and skipped, never stopping the others."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+from episodes.raw import write_raw
+from sim.registry import names, validate_name
+from sim.scene.builder import build_scene
+from sim.scene.sample import demonstration_sample, task_seed
+from sim.tasks import load_task
+from teleop.recorder import record_episode
+from teleop.scripted_operator import ScriptedOperator
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class RecordedEpisode:
+    episode_id: str
+    path: Path | None
+    success: bool
+    steps: int
+    error: str | None = None
+
+
+def raw_filename(episode_id: str) -> str:
+    return f"episode_{episode_id}.raw.h5"
+
+
+def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Path,
+                          max_steps: int | None = None, first_index: int = 0, progress=None) -> list[RecordedEpisode]:
+    validate_name("task", task)
+    validate_name("embodiment", embodiment)
+    spec = load_task(task)
+    task_index = names("tasks").index(task)
+    results = []
+    for i in range(first_index, first_index + episodes):
+        episode_id = f"{i:04d}"
+        seed = task_seed(task_index, i)
+        try:
+            scene = build_scene(spec, embodiment, demonstration_sample(spec, seed))
+            rec = record_episode(scene, ScriptedOperator(), episode_id, seed, max_steps=max_steps)
+            path = write_raw(Path(out_dir) / raw_filename(episode_id), rec)
+            results.append(RecordedEpisode(episode_id, path, rec.success, rec.num_steps))
+        except Exception as exc:   # one bad episode never stops the others
+            log.exception("episode %s of %s on %s failed", episode_id, task, embodiment)
+            results.append(RecordedEpisode(episode_id, None, False, 0, f"{type(exc).__name__}: {exc}"))
+        if progress:
+            progress(1)
+    return results

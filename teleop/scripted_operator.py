@@ -1,0 +1,153 @@
+"""A scripted operator that plays the person for pick-and-place plans.
+
+From the task's `demo_plan` (which hand moves which object where) it builds, per hand, a timeline
+of wrist keyframes (approach, descend, close, lift, carry, lower, open, retreat) with palm-down
+grasps, and solves the arm's Pinocchio IK every step towards the interpolated wrist pose; the
+hand blends between its open home pose and its closed grasp. The same plan drives any embodiment:
+nothing here depends on a particular arm or hand.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from sim.scene.builder import Scene
+
+# Palm down, fingers pointing away from the robot (+y world): hand axes (x, y=palm normal, z=fingers).
+PALM_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+# Segment durations in control steps (60 Hz).
+DURATIONS = {"approach": 60, "descend": 40, "close": 35, "hold": 10, "lift": 40, "carry": 60,
+             "lower": 40, "open": 25, "retreat": 30}
+APPROACH_HEIGHT_M = 0.12
+LIFT_HEIGHT_M = 0.14
+RELEASE_GAP_M = 0.008
+PALM_CLEARANCE_M = 0.004
+ALONG_FINGERS_M = 0.045       # object centre ahead of the palm centre, towards the finger roots
+CLOSED_FRACTION = 0.9         # how far towards the far end of each hand actuator's range
+STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
+SETTLE_STEPS = 45             # after the last release; reach-and-stop ends earlier on success
+
+
+def _quat(R: np.ndarray) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_mat2Quat(q, R.flatten())
+    return q
+
+
+def _slerp(q0: np.ndarray, q1: np.ndarray, s: float) -> np.ndarray:
+    if np.dot(q0, q1) < 0:
+        q1 = -q1
+    dot = min(1.0, float(np.dot(q0, q1)))
+    theta = np.arccos(dot)
+    if theta < 1e-6:
+        return q1.copy()
+    return (np.sin((1 - s) * theta) * q0 + np.sin(s * theta) * q1) / np.sin(theta)
+
+
+@dataclass
+class Keyframe:
+    end_step: int
+    pos: np.ndarray
+    quat: np.ndarray
+    closure: float
+
+
+class SideTimeline:
+    """Piecewise-linear wrist path and hand closure of one side."""
+
+    def __init__(self, start_pos, start_quat, start_step: int = 0):
+        self.frames = [Keyframe(start_step, np.asarray(start_pos, float), np.asarray(start_quat, float), 0.0)]
+
+    @property
+    def end(self) -> int:
+        return self.frames[-1].end_step
+
+    def add(self, duration: int, pos=None, quat=None, closure=None) -> None:
+        last = self.frames[-1]
+        self.frames.append(Keyframe(last.end_step + duration, last.pos if pos is None else np.asarray(pos, float),
+                                    last.quat if quat is None else np.asarray(quat, float),
+                                    last.closure if closure is None else closure))
+
+    def at(self, step: int) -> tuple[np.ndarray, np.ndarray, float]:
+        prev = self.frames[0]
+        for frame in self.frames[1:]:
+            if step < frame.end_step:
+                s = (step - prev.end_step) / max(1, frame.end_step - prev.end_step)
+                s = min(max(s, 0.0), 1.0)
+                s = s * s * (3 - 2 * s)     # smoothstep: zero velocity at keyframes
+                return (prev.pos + s * (frame.pos - prev.pos), _slerp(prev.quat, frame.quat, s),
+                        prev.closure + s * (frame.closure - prev.closure))
+            prev = frame
+        return prev.pos, prev.quat, prev.closure
+
+
+class ScriptedOperator:
+    name = "scripted"
+
+    def reset(self, scene: Scene, data: mujoco.MjData) -> None:
+        self.scene = scene
+        model = scene.model
+        self.ctrl_home = scene.layout.home_ctrl.copy()
+        self.sides = {}
+        grasp_quat = _quat(PALM_DOWN)
+        for side, lay in scene.layout.sides.items():
+            kin = scene.layout.arm_kinematics(side)
+            arm_ids = np.array([model.actuator(a).id for a in lay.arm_actuators])
+            hand_ids = np.array([model.actuator(a).id for a in lay.hand_actuators])
+            open_ = self.ctrl_home[hand_ids]
+            lo, hi = model.actuator_ctrlrange[hand_ids].T
+            far = np.where(np.abs(hi - open_) >= np.abs(lo - open_), hi, lo)
+            q_home = self.ctrl_home[arm_ids]
+            pos0, quat0 = kin.fk(q_home)
+            start = STAGGER_STEPS if side == "left" else 0
+            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
+                                "closed": open_ + CLOSED_FRACTION * (far - open_), "q": q_home.copy(),
+                                "timeline": SideTimeline(pos0, quat0, start), "home": (pos0, quat0)}
+        for item in scene.task.demo_plan:
+            self._plan_pick_place(data, item, grasp_quat)
+        for side in self.sides.values():
+            side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], closure=0.0)
+        self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS
+
+    def _object_pos(self, data, name) -> np.ndarray:
+        return data.xpos[self.scene.object_body_ids[name]].copy()
+
+    def _plan_pick_place(self, data, item: dict, quat: np.ndarray) -> None:
+        side = self.sides[item["hand"]]
+        tl: SideTimeline = side["timeline"]
+        task = self.scene.task
+        obj = task.objects[item["pick"]]
+        half_z = obj.half_extents[2]
+        # object centre in the wrist-site frame: below the palm (palm normal) and towards the fingers
+        offset = PALM_DOWN @ np.array([0.0, half_z + PALM_CLEARANCE_M, ALONG_FINGERS_M])
+        grasp = self._object_pos(data, item["pick"]) - offset
+        target = task.objects[item["place"]]
+        place_xy = self._object_pos(data, item["place"])[:2] + np.asarray(item.get("place_offset", [0, 0]))
+        place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + half_z + RELEASE_GAP_M)
+        place = np.array([*place_xy, place_z]) - offset
+        up = np.array([0, 0, 1.0])
+        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=quat, closure=0.0)
+        tl.add(DURATIONS["descend"], pos=grasp)
+        tl.add(DURATIONS["close"], closure=1.0)
+        tl.add(DURATIONS["hold"])
+        tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * up)
+        tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * up)
+        tl.add(DURATIONS["lower"], pos=place)
+        tl.add(DURATIONS["open"], closure=0.0)
+        tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
+
+    def act(self, step: int, data: mujoco.MjData) -> np.ndarray:
+        ctrl = self.ctrl_home.copy()
+        for side in self.sides.values():
+            pos, quat, closure = side["timeline"].at(step)
+            result = side["kin"].ik(pos, quat, side["q"], max_iters=30)
+            side["q"] = result.q
+            ctrl[side["arm_ids"]] = result.q
+            ctrl[side["hand_ids"]] = side["open"] + closure * (side["closed"] - side["open"])
+        return ctrl
+
+    def done(self, step: int) -> bool:
+        return step >= self.length

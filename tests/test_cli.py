@@ -1,0 +1,39 @@
+import json
+
+from click.testing import CliRunner
+
+from b2d_cli.main import cli
+TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
+
+
+def test_list_json():
+    runner = CliRunner()
+    for kind in ("embodiments", "tasks", "settings", "profiles", "channels"):
+        result = runner.invoke(cli, ["list", kind, "--json"])
+        assert result.exit_code == 0, result.output
+        rows = json.loads(result.output)
+        assert isinstance(rows, list) and rows
+    settings = json.loads(runner.invoke(cli, ["list", "settings", "--json"]).output)
+    assert len(settings) == 26
+
+
+def test_unknown_name_is_a_clear_error(tmp_path):
+    result = CliRunner().invoke(cli, ["record", "--task", "nope", "--embodiment", EMBODIMENT, "--out", str(tmp_path)])
+    assert result.exit_code == 2 and "valid task names" in result.output
+
+
+def test_record_replay_validate(tmp_path):
+    runner = CliRunner()
+    raw_dir, ep_dir = tmp_path / "raw", tmp_path / "episodes"
+    result = runner.invoke(cli, ["record", "--task", TASK, "--embodiment", EMBODIMENT, "--episodes", "1",
+                                 "--out", str(raw_dir), "--max-steps", "12"])
+    assert result.exit_code == 0, result.output
+    raw = sorted(raw_dir.glob("*.raw.h5"))
+    assert len(raw) == 1
+    result = runner.invoke(cli, ["replay", str(raw[0]), "--profile", "preview", "--out", str(ep_dir)])
+    assert result.exit_code == 0, result.output
+    episodes = sorted(ep_dir.glob("episode_*.hdf5"))
+    assert len(episodes) == 1 and (ep_dir / "episode_manifest.json").exists()
+    assert runner.invoke(cli, ["validate", str(episodes[0])]).exit_code == 0
+    (tmp_path / "junk.hdf5").write_bytes(b"not hdf5")
+    assert runner.invoke(cli, ["validate", str(tmp_path / "junk.hdf5")]).exit_code == 1

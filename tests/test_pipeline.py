@@ -1,0 +1,59 @@
+"""The Dagster definitions load, and one materialize() of the whole chain works at the smallest size."""
+
+import dagster as dg
+import pandas as pd
+
+from b2d_pipeline.definitions import build_definitions, defs
+from b2d_pipeline.demo import materialize_chain
+from b2d_pipeline.settings import FactorySettings
+SETTING = "citrus_plate_loading__ur5_rh5dg2"
+
+ASSETS = {"raw_recordings", "replays", "renders", "episodes", "channel_rollouts", "evaluation_table"}
+
+
+def test_definitions_load():
+    keys = {k.to_user_string() for k in defs.resolve_asset_graph().get_all_asset_keys()}
+    assert keys == ASSETS
+    assert SETTING in defs.resolve_assets_def("raw_recordings").partitions_def.get_partition_keys()
+
+
+def test_profile_change_changes_render_code_version(tmp_path):
+    preview = build_definitions(FactorySettings.from_env(data_root=tmp_path, profile="preview"))
+    paper = build_definitions(FactorySettings.from_env(data_root=tmp_path, profile="paper"))
+    for key in ("renders", "episodes"):
+        a = preview.resolve_assets_def(key).code_versions_by_key[dg.AssetKey(key)]
+        b = paper.resolve_assets_def(key).code_versions_by_key[dg.AssetKey(key)]
+        assert a != b
+    assert (preview.resolve_assets_def("replays").code_versions_by_key[dg.AssetKey("replays")]
+            == paper.resolve_assets_def("replays").code_versions_by_key[dg.AssetKey("replays")])
+
+
+def test_materialize_whole_chain(tmp_path):
+    settings = FactorySettings.from_env(data_root=tmp_path, profile="preview", demo_episodes=1,
+                                        eval_episodes=1, max_steps=12)
+    with dg.DagsterInstance.ephemeral() as instance:
+        results = materialize_chain(settings, [SETTING], instance, channels=["none", "inv_equi"], log=lambda m: None)
+    assert all(r.success for r in results)
+    profile_hash = settings.profile.content_hash
+    assert list((tmp_path / "episodes" / profile_hash / SETTING).glob("episode_*.hdf5"))
+    table = pd.read_parquet(tmp_path / "evaluation" / "evaluation_table.parquet")
+    assert set(table["channel"]) == {"none", "inv_equi"}
+    assert {"SR", "LSCR", "N"} <= set(table.columns)
+    assert (table["N"] == 1).all()
+
+
+def test_bad_recording_fails_its_partition_and_keeps_the_rest(tmp_path, raw_path):
+    settings = FactorySettings.from_env(data_root=tmp_path, profile="preview", demo_episodes=1, max_steps=12)
+    raw_dir = tmp_path / "raw" / SETTING
+    raw_dir.mkdir(parents=True)
+    (raw_dir / "episode_0000.raw.h5").write_bytes(raw_path.read_bytes())
+    (raw_dir / "episode_0001.raw.h5").write_bytes(raw_path.read_bytes()[:1000])    # truncated
+    d = build_definitions(settings)
+    with dg.DagsterInstance.ephemeral() as instance:
+        result = dg.materialize(list(d.assets), selection=["replays"], partition_key=SETTING, instance=instance,
+                                resources=d.resources, raise_on_error=False)
+    assert not result.success
+    failure = next(e for e in result.all_events if e.is_step_failure)
+    assert "episode_0001.raw.h5" in str(failure.event_specific_data) and "truncated" in str(failure.event_specific_data)
+    assert (tmp_path / "replays" / SETTING / "episode_0000.replay.h5").exists()
+    assert not (tmp_path / "replays" / SETTING / "episode_0001.replay.h5").exists()
