@@ -107,7 +107,7 @@ class EpisodeEvaluator:
         try:
             dt = float(dt)
         except (TypeError, ValueError):
-            dt = math.nan
+            raise ValueError(f"dt must be a positive finite number of seconds, got {dt!r}") from None
         if not (math.isfinite(dt) and dt > 0):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt!r}")
         if self.initial is None:
