@@ -58,7 +58,7 @@ class ArgReader:
     def done(self) -> None:
         for name in self.raw:
             if name not in self.known:
-                raise self.error(name, f"an argument of {self.predicate}: {one_of(self.known)}")
+                raise self.error(name, f"an argument of {self.predicate}: {one_of(set(self.known))}")
 
     def _names(self, name: str, value: Any, valid: Sequence[str], what: str) -> str:
         if not isinstance(value, str) or value not in valid:
@@ -79,7 +79,8 @@ class ArgReader:
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise self.error(name, "a finite number", value)
         if (lo is not None and value < lo) or (hi is not None and value > hi):
-            raise self.error(name, f"a number in [{lo}, {hi}]", value)
+            bounds = [f">= {lo}"] * (lo is not None) + [f"<= {hi}"] * (hi is not None)
+            raise self.error(name, "a number " + " and ".join(bounds), value)
         return float(value)
 
     def integer(self, name: str, default: Any = REQUIRED, lo: int = 1) -> int:
@@ -158,7 +159,8 @@ class ArgReader:
             return Target("object", value)
         if isinstance(value, str) and value in ctx.points:
             return Target("point", value)
-        raise self._err(f"{self.path}.{field}", f"an object {one_of(ctx.objects)} or a point {one_of(ctx.points)}", value)
+        expected = f"an object {one_of(ctx.objects)} or a point {one_of(ctx.points)}"
+        raise self._err(f"{self.path}.{field}", expected, value)
 
     def target(self, name: str) -> Target:
         return self._target(name, self._get(name, REQUIRED))
@@ -167,18 +169,24 @@ class ArgReader:
         return [self._target(f, v) for f, v in self._list(name, REQUIRED)]
 
     def zone(self, name: str) -> dict:
+        """A context zone as {xy_min, xy_max} or {center_xy, radius} with numpy values."""
         zones = self.scope.context.zones
         zone = zones[self._names(name, self._get(name, REQUIRED), list(zones), "a zone")]
-        rect = "xy_min" in zone and "xy_max" in zone
-        disc = "center_xy" in zone and "radius" in zone
-        if not (rect or disc):
-            raise self.error(name, "a context zone with xy_min/xy_max or center_xy/radius", zone)
-        return zone
+        try:
+            if set(zone) >= {"xy_min", "xy_max"}:
+                out = {k: np.asarray(zone[k], dtype=float).reshape(2) for k in ("xy_min", "xy_max")}
+            else:
+                out = {"center_xy": np.asarray(zone["center_xy"], dtype=float).reshape(2),
+                       "radius": float(zone["radius"])}
+        except (KeyError, TypeError, ValueError):
+            raise self.error(name, "a context zone with xy_min/xy_max or center_xy/radius (2 numbers each, "
+                             "radius a number)", zone) from None
+        return out
 
     def _joint(self, field: str, value: Any) -> str:
         ctx = self.scope.context
         if ctx.joints is not None:
-            if value not in ctx.joints:
+            if not isinstance(value, str) or value not in ctx.joints:
                 raise self._err(f"{self.path}.{field}", f"a joint {one_of(ctx.joints)}", value)
             return value
         if not isinstance(value, str) or value.count("/") != 1 or value.split("/")[0] not in ctx.objects:

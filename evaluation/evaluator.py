@@ -36,11 +36,13 @@ SPEC_KEYS = ("terminal", "stages", "dwell_s", "safety", "grasp", "expert_horizon
              "sim_dt_s", "description")
 
 
-def _positive(spec: Mapping, key: str, field: str, source: str | None, integer: bool = False, lo: float = 0.0):
-    value = spec.get(key)
+def _number(spec: Mapping, key: str, field: str, source: str | None, integer: bool = False,
+            positive: bool = False):
+    """A spec scalar: an integer >= 1, or a finite number >= 0 (> 0 when ``positive``)."""
+    value = spec[key]
     bad = isinstance(value, bool) or not isinstance(value, int if integer else (int, float))
-    if bad or not math.isfinite(value) or value < lo or (integer and value < 1):
-        kind = "a positive integer" if integer else f"a finite number >= {lo}"
+    if bad or not math.isfinite(value) or value < 0 or ((integer or positive) and value <= 0):
+        kind = "a positive integer" if integer else "a positive number" if positive else "a number >= 0"
         raise TaskSpecError(f"{field}.{key}", kind, value, source)
     return value
 
@@ -59,14 +61,14 @@ class EpisodeEvaluator:
         if "terminal" not in spec:
             raise TaskSpecError(f"{field}.terminal", "a terminal condition (required)", None, source)
         if "expert_horizon_steps" in spec and "expert_time_step" in spec:
-            raise TaskSpecError(f"{field}.expert_time_step", "only one of expert_horizon_steps / expert_time_step",
-                                  None, source)
+            raise TaskSpecError(f"{field}.expert_time_step",
+                                "only one of expert_horizon_steps / expert_time_step", None, source)
         self.context, self.source = context, source
         self.labels = dict(labels or {})
-        self.dwell = Dwell(_positive(spec, "dwell_s", field, source) if "dwell_s" in spec else 0.5)
+        self.dwell = Dwell(_number(spec, "dwell_s", field, source) if "dwell_s" in spec else 0.5)
         horizon_key = "expert_time_step" if "expert_time_step" in spec else "expert_horizon_steps"
-        self.expert_horizon = _positive(spec, horizon_key, field, source, integer=True) if horizon_key in spec else None
-        self.sim_dt = _positive(spec, "sim_dt_s", field, source) if "sim_dt_s" in spec else None
+        self.expert_horizon = _number(spec, horizon_key, field, source, integer=True) if horizon_key in spec else None
+        self.sim_dt = _number(spec, "sim_dt_s", field, source, positive=True) if "sim_dt_s" in spec else None
         self.stages = StageGraph(spec.get("stages"), context, source, f"{field}.stages")
         self.terminal = CompileScope(context, self.stages.ids, source).compile(spec["terminal"], f"{field}.terminal")
         self.safety = SafetyMonitor(spec.get("safety"), context, source, f"{field}.safety")
@@ -119,8 +121,9 @@ class EpisodeEvaluator:
             self.policy_queries = (self.policy_queries or 0) + int(policy_query)
         step = EvalStep(state, self.context, self.initial, dt, {}, self.latched)
         values = self.stages.evaluate(step)
+        now = self.dwell.elapsed + dt  # sum of dt up to this update
         for k in self.stages.latch(values, self.latched):
-            self.latched_at[k] = self.dwell.elapsed + dt
+            self.latched_at[k] = now
         valid = self.stages.valid(values, self.latched)
         c = bool(self.terminal(step))
         was_stable = self.dwell.stable

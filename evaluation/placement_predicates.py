@@ -159,7 +159,7 @@ class InZone(Condition):
         xy = np.asarray(s.obj(self.object).pos, dtype=float)[:2]
         if "xy_min" in self.zone:
             return bool(np.all(xy >= self.zone["xy_min"]) and np.all(xy <= self.zone["xy_max"]))
-        return float(np.linalg.norm(xy - np.asarray(self.zone["center_xy"], float))) <= self.zone["radius"]
+        return float(np.linalg.norm(xy - self.zone["center_xy"])) <= self.zone["radius"]
 
 
 @register("relative_offset")

@@ -60,7 +60,7 @@ class SafetyMonitor:
             return False
         if "xy_min" in z:
             return bool(np.any(xy < z["xy_min"]) or np.any(xy > z["xy_max"]))
-        return float(np.linalg.norm(xy - np.asarray(z["center_xy"], float))) > z["radius"]
+        return float(np.linalg.norm(xy - z["center_xy"])) > z["radius"]
 
     def drop(self, state: SceneState) -> bool:
         """A tracked object is below the tabletop by more than the margin, or outside the table zone."""

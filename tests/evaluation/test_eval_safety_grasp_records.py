@@ -31,7 +31,8 @@ def test_drop_and_high_speed_flags_per_step_and_episode():
 
 def test_drop_margin_and_no_safety_block():
     slightly_low = [scene({"apple": obj([0, 0, TABLE_Z - 0.04])})]
-    record, _ = evaluate_states({"terminal": UPRIGHT, "safety": {"drop": {"objects": ["apple"]}}}, context(), slightly_low, 0.1)
+    spec = {"terminal": UPRIGHT, "safety": {"drop": {"objects": ["apple"]}}}
+    record, _ = evaluate_states(spec, context(), slightly_low, 0.1)
     assert not record.drop  # 4 cm under the top is within the default 5 cm margin
     record, _ = evaluate_states({"terminal": UPRIGHT, "dwell_s": 0.1}, context(),
                                 [scene({"apple": resting("apple", v=(9, 0, 0))})], 0.1)
@@ -125,3 +126,21 @@ def test_citrus_style_task_end_to_end():
                                 source="citrus_plate_loading.yaml")
     assert record.success and record.steps_to_stable == 40 and record.lscr == 1.0
     assert record.te == pytest.approx(1500 / 60 / record.t_stable)
+
+
+def test_missing_state_entries_raise_state_error_naming_them():
+    from evaluation import StateError
+    ev = EpisodeEvaluator({"terminal": {"joint_open": {"joint": "fridge/door", "threshold": 1}}}, context())
+    with pytest.raises(StateError, match="fridge/door"):
+        ev.update(scene({"apple": resting("apple")}), 0.1)
+    ev = EpisodeEvaluator({"terminal": UPRIGHT}, context())
+    with pytest.raises(StateError, match="'apple'"):
+        ev.update(scene({}), 0.1)
+
+
+def test_library_imports_neither_simulator_nor_orchestrator():
+    import subprocess
+    import sys
+    code = ("import sys, evaluation, evaluation.metrics; "
+            "bad = [m for m in sys.modules if m.split('.')[0] in ('mujoco', 'dagster')]; assert not bad, bad")
+    subprocess.run([sys.executable, "-c", code], check=True)
