@@ -46,6 +46,12 @@ _GEOM_TYPES = {
     "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
 }
 PAD_THICKNESS_M = 0.002
+# stiff joint limits (time constant 2.4 physics steps): a saturated servo pushing a light finger into
+# its stop should not overshoot by more than about 0.01 rad
+LIMIT_SOLREF = (0.005, 1.0)
+# hand links whose origin is this close to the hand base (palm, thumb base and proximal) never get
+# meaningful contact with the last two arm links at the wrist
+WRIST_NEAR_M = 0.06
 PAD_RGBA = (0.12, 0.12, 0.14, 1.0)
 TORSO_RGBA = (0.35, 0.36, 0.4, 1.0)
 
@@ -148,6 +154,7 @@ def _add_link(parent: mujoco.MjsBody, link: LinkSpec, prefix: str, origin: Trans
             name=prefix + j.name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=j.axis,
             range=[j.range[0] * unit, j.range[1] * unit], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
             armature=j.armature, damping=j.damping, frictionloss=j.frictionloss,
+            solref_limit=list(LIMIT_SOLREF),
         )
     for g in link.geoms:
         _add_geom(body, g)
@@ -263,6 +270,7 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
     home_left, home_right = _home_arm(emb.name)
     home_arm = {"left": np.array(home_left), "right": np.array(home_right)}
     hand_q = _hand_home(hand)
+    hand_poses = hand_link_poses(hand)
 
     sides: dict[str, SideLayout] = {}
     palms: dict[str, mujoco.MjsBody] = {}
@@ -354,8 +362,11 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
             tactile_bodies=tactile_bodies, hand_bodies=[b.name for b in bodies.values()],
             arm_bodies=arm_bodies, hand_base=palm.name, camera=f"{side}_wrist",
         )
-        # the hand base is rigidly on the last arm link: exclude it from the last two arm links too
-        excludes.append((arm_bodies[-2], palm.name))
+        # the hand base is rigidly on the last arm link: the palm and the links hinged on it
+        # (finger bases, thumb base, links near the wrist) cannot meaningfully touch the last two arm links
+        near = [lk.name for lk, T in ((lk, hand_poses[lk.name]) for lk in hand.links) if np.linalg.norm(T.pos) < WRIST_NEAR_M]
+        for b in [p + n for n in near] + [p + lk.name for lk in links if lk.parent == links[0].name]:
+            excludes += [(arm_bodies[-1], b), (arm_bodies[-2], b)]
     seen = set()
     for a, b in excludes:
         key = tuple(sorted((a, b)))

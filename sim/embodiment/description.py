@@ -525,7 +525,7 @@ def load_arm(name: str) -> ArmDescription:
             end = [float(v) for v in nxt.get("xyz", [0, 0, 0])]
             r = float(link_raw["segment_radius"])
             extra = list(link_raw.get("geoms", []))
-            if np.linalg.norm(end) > 1e-3:
+            if np.linalg.norm(end) > 1e-3 and not link_raw.get("no_segment", False):
                 extra.insert(0, {"type": "capsule", "fromto": [0, 0, 0] + end, "radius": r})
             ax = np.asarray(entry.get("axis", [0, 0, 1]), float)
             h = float(link_raw.get("housing_half_length", r))
@@ -755,6 +755,10 @@ def load_embodiment(name: str) -> EmbodimentDescription:
     ctx = _Ctx(path)
     arm = load_arm(str(_get(data, "arm", ctx)))
     hand = load_hand(str(_get(data, "hand", ctx)))
+    clash = ({lk.name for lk in arm.links} & {lk.name for lk in hand.links}) | \
+        ({j.name for j in arm.joints} & {j.name for j in hand.joints})
+    if clash:
+        ctx.fail(f"arm {arm.name!r} and hand {hand.name!r} share link/joint names {sorted(clash)}; rename them in the hand file")
     mount = _get(data, "mount", ctx)
     mounts = {side: _transform(_get(mount, side, ctx.sub("mount")), ctx.sub(f"mount.{side}"))
               for side in ("left", "right")}
