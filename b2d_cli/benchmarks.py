@@ -6,8 +6,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
 from sim import physics
 from sim.registry import names, sensor_profile
@@ -16,7 +14,7 @@ from sim.scene.sample import demonstration_sample, task_seed
 from sim.scene.state import SceneObserver
 from sim.tasks import load_task
 from teleop.demos import record_demonstrations
-from teleop.recorder import home
+from teleop.recorder import home, new_buffer, record_step
 from teleop.scripted_operator import ScriptedOperator
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
@@ -38,15 +36,13 @@ def bench_recorder(steps: int) -> dict:
     actions = [op.act(t, data) for t in range(steps)]        # operator cost is not the recorder's
     observer = SceneObserver(scene)
     evaluator = EpisodeEvaluator(scene.task.metrics, observer.context)
+    buf = new_buffer(scene, len(evaluator.stage_ids))
     physics_s = record_s = 0.0
     for t in range(steps):
         t0 = time.perf_counter()
         physics.step_control(scene.model, data, actions[t])
         t1 = time.perf_counter()
-        state = observer.state(data)
-        evaluator.update(state, physics.CONTROL_DT)
-        np.stack([np.concatenate([o.pos, o.quat]) for o in state.objects.values()])
-        data.qpos[scene.robot_qpos_adr].copy()
+        record_step(scene, observer, evaluator, buf, data, actions[t])
         record_s += time.perf_counter() - t1
         physics_s += t1 - t0
     return {"steps": steps, "physics_ms_per_control_step": 1e3 * physics_s / steps,

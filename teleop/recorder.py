@@ -55,6 +55,26 @@ def home(scene: Scene) -> mujoco.MjData:
     return data
 
 
+def new_buffer(scene: Scene, n_stages: int) -> StepBuffer:
+    n_obj, n_joint = len(scene.object_names), len(scene.layout.joint_names)
+    return StepBuffer(
+        {"action": (scene.model.nu,), "robot_qpos": (n_joint,), "robot_qvel": (n_joint,),
+         "object_pose": (n_obj, 7), "terminal": (), "stage_latched": (n_stages,), "step_flags": ()},
+        {"terminal": bool, "stage_latched": bool, "step_flags": np.uint8})
+
+
+def record_step(scene: Scene, observer: SceneObserver, evaluator: EpisodeEvaluator, buf: StepBuffer,
+                data: mujoco.MjData, action: np.ndarray):
+    """The recorder's work after one control step: snapshot, evaluator update, buffer push."""
+    state = observer.state(data)
+    record = evaluator.update(state, physics.CONTROL_DT)
+    buf.push(action=action, robot_qpos=data.qpos[scene.robot_qpos_adr],
+             robot_qvel=data.qvel[scene.robot_dof_adr],
+             object_pose=np.stack([np.concatenate([o.pos, o.quat]) for o in state.objects.values()]),
+             terminal=record.terminal, stage_latched=record.stage_latched, step_flags=0)
+    return record
+
+
 def record_episode(scene: Scene, operator: Operator, episode_id: str, seed: int,
                    max_steps: int | None = None, stop_on_success: bool = True) -> RawRecording:
     model = scene.model
@@ -63,23 +83,14 @@ def record_episode(scene: Scene, operator: Operator, episode_id: str, seed: int,
     observer = SceneObserver(scene)
     evaluator = EpisodeEvaluator(scene.task.metrics, observer.context, source=str(scene.task.source))
     operator.reset(scene, data)
-    n_obj, n_joint = len(scene.object_names), len(scene.layout.joint_names)
     stage_ids = evaluator.stage_ids
-    buf = StepBuffer(
-        {"action": (model.nu,), "robot_qpos": (n_joint,), "robot_qvel": (n_joint,),
-         "object_pose": (n_obj, 7), "terminal": (), "stage_latched": (len(stage_ids),), "step_flags": ()},
-        {"terminal": bool, "stage_latched": bool, "step_flags": np.uint8})
+    buf = new_buffer(scene, len(stage_ids))
     horizon = max_steps if max_steps is not None else scene.task.metrics.get("horizon_steps") or 10_000
     step = 0
     while step < horizon and not operator.done(step):
         action = operator.act(step, data)
         physics.step_control(model, data, action)
-        state = observer.state(data)
-        record = evaluator.update(state, physics.CONTROL_DT)
-        buf.push(action=action, robot_qpos=data.qpos[scene.robot_qpos_adr],
-                 robot_qvel=data.qvel[scene.robot_dof_adr],
-                 object_pose=np.stack([np.concatenate([o.pos, o.quat]) for o in state.objects.values()]),
-                 terminal=record.terminal, stage_latched=record.stage_latched, step_flags=0)
+        record = record_step(scene, observer, evaluator, buf, data, action)
         step += 1
         if stop_on_success and record.stable:
             break    # reach-and-stop
