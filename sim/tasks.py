@@ -34,6 +34,7 @@ class ObjectSpec:
     fixed_pose: bool                      # task constraint: never perturbed
     interior_half_extents: tuple[float, float, float] | None = None
     interior_offset: tuple[float, float, float] | None = None
+    rolling_friction: float = 0.0         # metres; > 0 resists rolling (soft, not perfectly round objects)
 
     @property
     def half_extents(self) -> np.ndarray:
@@ -112,6 +113,7 @@ def _parse_object(path, name, raw, zones) -> ObjectSpec:
         yaw_deg=float((pose or {}).get("yaw_deg", 0.0)),
         zone=zone,
         fixed_pose=bool(raw.get("fixed_pose", False)),
+        rolling_friction=_non_negative(path, f"{where}.rolling_friction", raw.get("rolling_friction", 0.0)),
         interior_half_extents=(_num_list(path, f"{where}.container.interior_half_extents",
                                          container["interior_half_extents"], 3)
                                if container else None),
@@ -119,6 +121,12 @@ def _parse_object(path, name, raw, zones) -> ObjectSpec:
                                    container.get("interior_offset", [0, 0, 0]), 3)
                          if container else None),
     )
+
+
+def _non_negative(path: Path, field: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:
+        raise SpecError(path, field, "a non-negative number", value)
+    return float(value)
 
 
 def parse_task(raw: dict, path: Path) -> TaskSpec:

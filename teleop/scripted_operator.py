@@ -2,9 +2,14 @@
 
 From the task's `demo_plan` (which hand moves which object where) it builds, per hand, a timeline
 of wrist keyframes (approach, descend, close, lift, carry, lower, open, retreat) with palm-down
-grasps, and solves the arm's Pinocchio IK every step towards the interpolated wrist pose; the
-hand blends between its open home pose and its closed grasp. The same plan drives any embodiment:
-nothing here depends on a particular arm or hand.
+grasps, and solves the arm's Pinocchio IK every step towards the interpolated wrist pose. The
+same plan drives any embodiment: nothing here depends on a particular arm or hand.
+
+Where the object sits in the hand and how the hand closes come from the hand file: its
+`tabletop_grasp` (object centre in the wrist-site frame, closing targets, which actuators close
+late and which stay closed on release), else its `grasp_probe` power grasp. Like a person, the
+operator looks once more where the object sits in the hand when it is above the target, and
+corrects the lowering for a slipped grasp.
 """
 
 from __future__ import annotations
@@ -14,21 +19,51 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from sim.embodiment.description import HandDescription, load_embodiment
+from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
 
 # Palm down, fingers pointing away from the robot (+y world): hand axes (x, y=palm normal, z=fingers).
 PALM_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 # Segment durations in control steps (60 Hz).
-DURATIONS = {"approach": 60, "descend": 40, "close": 35, "hold": 10, "lift": 40, "carry": 60,
-             "lower": 40, "open": 25, "retreat": 30}
+DURATIONS = {"approach": 60, "descend": 40, "close": 20, "close_late": 20, "hold": 10, "lift": 40,
+             "carry": 60, "lower": 40, "open": 20, "retreat": 30}
+# Hand closure per actuator group (early, late, held), each 0 = open .. 1 = grasp target. Closing:
+# the early actuators (fingers) form a wall, then the late ones (thumb) press the object against
+# it. Releasing: all open except the held ones (thumb opposition), which open once the hand is
+# clear, so the thumb neither hooks the object nor swings into fruit already placed.
+OPEN, WALL, CLOSED, RELEASED = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 1.0), (0.0, 0.0, 1.0)
 APPROACH_HEIGHT_M = 0.12
 LIFT_HEIGHT_M = 0.14
-RELEASE_GAP_M = 0.008
+RELEASE_GAP_M = 0.03          # fruit is let go just above the plate, so the opening fingers clear it
 PALM_CLEARANCE_M = 0.004
-ALONG_FINGERS_M = 0.045       # object centre ahead of the palm centre, towards the finger roots
-CLOSED_FRACTION = 0.9         # how far towards the far end of each hand actuator's range
+CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
 SETTLE_STEPS = 45             # after the last release; reach-and-stop ends earlier on success
+
+
+@dataclass
+class HandGrasp:
+    centre: np.ndarray            # object centre in the wrist-site frame
+    targets: dict[str, float]     # unprefixed actuator -> closing target
+    late: tuple[str, ...] = ()    # actuators that close after the others
+    held: tuple[str, ...] = ()    # late actuators that stay closed on release until the hand is clear
+
+
+def hand_grasp(hand: HandDescription, side: str) -> HandGrasp:
+    """The hand's declared palm-down grasp (`tabletop_grasp`, else the `grasp_probe` power grasp),
+    mirrored for the left side."""
+    if hand.tabletop_grasp is not None:
+        g = hand.tabletop_grasp
+        return HandGrasp(mirror_vec(g.centre) if side == "left" else np.asarray(g.centre, float),
+                         dict(g.close), tuple(g.late), tuple(g.held))
+    elif hand.grasp_probe is not None:
+        site = hand.wrist_site
+        centre = site.rot.T @ (np.asarray(hand.grasp_probe.pos, float) - site.pos)
+        targets, late = dict(hand.grasp_probe.close), ()
+    else:
+        centre, targets, late = np.zeros(3), {}, ()
+    return HandGrasp(mirror_vec(centre) if side == "left" else centre, targets, late)
 
 
 def _quat(R: np.ndarray) -> np.ndarray:
@@ -52,14 +87,15 @@ class Keyframe:
     end_step: int
     pos: np.ndarray
     quat: np.ndarray
-    closure: float
+    closure: np.ndarray     # (early, late, held)
 
 
 class SideTimeline:
     """Piecewise-linear wrist path and hand closure of one side."""
 
     def __init__(self, start_pos, start_quat, start_step: int = 0):
-        self.frames = [Keyframe(start_step, np.asarray(start_pos, float), np.asarray(start_quat, float), 0.0)]
+        self.frames = [Keyframe(start_step, np.asarray(start_pos, float), np.asarray(start_quat, float),
+                                np.asarray(OPEN, float))]
 
     @property
     def end(self) -> int:
@@ -69,7 +105,7 @@ class SideTimeline:
         last = self.frames[-1]
         self.frames.append(Keyframe(last.end_step + duration, last.pos if pos is None else np.asarray(pos, float),
                                     last.quat if quat is None else np.asarray(quat, float),
-                                    last.closure if closure is None else closure))
+                                    last.closure if closure is None else np.asarray(closure, float)))
 
     def at(self, step: int) -> tuple[np.ndarray, np.ndarray, float]:
         prev = self.frames[0]
@@ -92,7 +128,7 @@ class ScriptedOperator:
         model = scene.model
         self.ctrl_home = scene.layout.home_ctrl.copy()
         self.sides = {}
-        grasp_quat = _quat(PALM_DOWN)
+        hand = load_embodiment(scene.layout.embodiment).hand
         for side, lay in scene.layout.sides.items():
             kin = scene.layout.arm_kinematics(side)
             arm_ids = np.array([model.actuator(a).id for a in lay.arm_actuators])
@@ -100,53 +136,80 @@ class ScriptedOperator:
             open_ = self.ctrl_home[hand_ids]
             lo, hi = model.actuator_ctrlrange[hand_ids].T
             far = np.where(np.abs(hi - open_) >= np.abs(lo - open_), hi, lo)
+            closed = open_ + CLOSED_FRACTION * (far - open_)
+            grasp = hand_grasp(hand, side)
+            group = np.zeros(len(hand_ids), int)       # index into the closure triple
+            for i, name in enumerate(lay.hand_actuators):
+                short = name.removeprefix(f"{side}_")
+                if short in grasp.targets:
+                    closed[i] = np.clip(grasp.targets[short], lo[i], hi[i])
+                group[i] = 2 if short in grasp.held else 1 if short in grasp.late else 0
             q_home = self.ctrl_home[arm_ids]
             pos0, quat0 = kin.fk(q_home)
             start = STAGGER_STEPS if side == "left" else 0
-            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
-                                "closed": open_ + CLOSED_FRACTION * (far - open_), "q": q_home.copy(),
+            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_, "wrist_site": lay.wrist_site,
+                                "closed": closed, "group": group, "grasp_centre": grasp.centre, "corrections": [],
+                                "q": q_home.copy(),
                                 "timeline": SideTimeline(pos0, quat0, start), "home": (pos0, quat0)}
         for item in scene.task.demo_plan:
-            self._plan_pick_place(data, item, grasp_quat)
+            self._plan_pick_place(data, item)
         for side in self.sides.values():
-            side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], closure=0.0)
+            side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], closure=OPEN)
         self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS
 
     def _object_pos(self, data, name) -> np.ndarray:
         return data.xpos[self.scene.object_body_ids[name]].copy()
 
-    def _plan_pick_place(self, data, item: dict, quat: np.ndarray) -> None:
+    def _plan_pick_place(self, data, item: dict) -> None:
         side = self.sides[item["hand"]]
         tl: SideTimeline = side["timeline"]
         task = self.scene.task
         obj = task.objects[item["pick"]]
         half_z = obj.half_extents[2]
-        # object centre in the wrist-site frame: below the palm (palm normal) and towards the fingers
-        offset = PALM_DOWN @ np.array([0.0, half_z + PALM_CLEARANCE_M, ALONG_FINGERS_M])
+        rot, quat = PALM_DOWN, _quat(PALM_DOWN)
+        # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
+        cx, cy, cz = side["grasp_centre"]
+        offset = rot @ np.array([cx, max(cy, half_z + PALM_CLEARANCE_M), cz])
         grasp = self._object_pos(data, item["pick"]) - offset
         target = task.objects[item["place"]]
         place_xy = self._object_pos(data, item["place"])[:2] + np.asarray(item.get("place_offset", [0, 0]))
         place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + half_z + RELEASE_GAP_M)
         place = np.array([*place_xy, place_z]) - offset
         up = np.array([0, 0, 1.0])
-        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=quat, closure=0.0)
+        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=quat, closure=OPEN)
         tl.add(DURATIONS["descend"], pos=grasp)
-        tl.add(DURATIONS["close"], closure=1.0)
+        tl.add(DURATIONS["close"], closure=WALL)
+        tl.add(DURATIONS["close_late"], closure=CLOSED)
         tl.add(DURATIONS["hold"])
         tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * up)
         tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * up)
+        # above the target the operator looks where the object really sits in the hand (it may
+        # have slipped while carried) and corrects the lower .. retreat keyframes for it
+        side["corrections"].append((tl.end, item["pick"], offset, len(tl.frames)))
         tl.add(DURATIONS["lower"], pos=place)
-        tl.add(DURATIONS["open"], closure=0.0)
+        tl.add(DURATIONS["open"], closure=RELEASED)
         tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
+        tl.add(DURATIONS["open"], closure=OPEN)
+
+    def _correct_place(self, side: dict, data: mujoco.MjData, step: int) -> None:
+        while side["corrections"] and side["corrections"][0][0] <= step:
+            _, name, planned_offset, first = side["corrections"].pop(0)
+            wrist = data.site_xpos[self.scene.model.site(side["wrist_site"]).id]
+            error = (self._object_pos(data, name) - wrist) - planned_offset
+            error[2] = 0.0      # height is set by the release gap
+            for frame in side["timeline"].frames[first:first + 3]:    # lower, open, retreat
+                frame.pos = frame.pos - error
 
     def act(self, step: int, data: mujoco.MjData) -> np.ndarray:
         ctrl = self.ctrl_home.copy()
         for side in self.sides.values():
+            self._correct_place(side, data, step)
             pos, quat, closure = side["timeline"].at(step)
             result = side["kin"].ik(pos, quat, side["q"], max_iters=30)
             side["q"] = result.q
             ctrl[side["arm_ids"]] = result.q
-            ctrl[side["hand_ids"]] = side["open"] + closure * (side["closed"] - side["open"])
+            c = closure[side["group"]]
+            ctrl[side["hand_ids"]] = side["open"] + c * (side["closed"] - side["open"])
         return ctrl
 
     def done(self, step: int) -> bool:

@@ -231,10 +231,11 @@ def _home_arm(name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
         seeds = [emb.home_seed[side]] if emb.home_seed else []
         seeds.append(emb.arm.home_seed[side])
         best = None
-        for seed in seeds:
+        for seed in seeds:      # the embodiment's own seed first: it names the configuration wanted
             r = kin.ik(target.pos, target.quat, seed, max_iters=500)
-            if r.success and (best is None or np.linalg.norm(r.q - seed) < np.linalg.norm(best.q - seed)):
+            if r.success:
                 best = r
+                break
         if best is None:
             raise ValueError(f"{emb.path}: field 'home.right_wrist': the {side} arm cannot reach the home "
                              f"wrist pose {target.pos.tolist()} (IK failed from the arm's home_seed)")

@@ -238,6 +238,16 @@ class GraspProbe:
 
 
 @dataclass(frozen=True)
+class TabletopGrasp:
+    """How the scripted operator grasps an object resting on the table with the palm down."""
+
+    centre: np.ndarray          # object centre in the wrist-site frame (x lateral, y palm normal, z fingers)
+    close: dict[str, float]     # actuator -> closing target
+    late: tuple[str, ...]       # actuators that close only after the others have formed a wall
+    held: tuple[str, ...]       # late actuators kept closed on release until the hand is clear
+
+
+@dataclass(frozen=True)
 class HandDescription:
     name: str
     display_name: str
@@ -252,6 +262,7 @@ class HandDescription:
     home: dict[str, float]         # joint -> open-hand angle (missing joints: 0 clipped to range)
     fingers: tuple[str, ...]
     grasp_probe: GraspProbe | None
+    tabletop_grasp: TabletopGrasp | None
     contact_exclude: tuple[tuple[str, str], ...]
     servo_error_at_full_effort: float
     path: Path
@@ -720,6 +731,19 @@ def load_hand(name: str) -> HandDescription:
             axis=_vec(g.get("axis", [1, 0, 0]), 3, gctx.sub("axis")),
             close=close,
         )
+    tabletop = None
+    if "tabletop_grasp" in data:
+        g = data["tabletop_grasp"]
+        gctx = ctx.sub("tabletop_grasp")
+        act_names = {a.name for a in actuators}
+        close = {str(k): float(v) for k, v in _get(g, "close", gctx).items()}
+        late = tuple(str(k) for k in g.get("late", []))
+        held = tuple(str(k) for k in g.get("held", []))
+        for field_name, keys in (("close", close), ("late", late), ("held", held)):
+            for k in keys:
+                if k not in act_names:
+                    gctx.sub(field_name).fail(f"{k!r} is not an actuator of this hand {sorted(act_names)}")
+        tabletop = TabletopGrasp(centre=_vec(_get(g, "centre", gctx), 3, gctx.sub("centre")), close=close, late=late, held=held)
     return HandDescription(
         name=str(data.get("name", name)), display_name=str(data.get("display_name", name)),
         source=str(_get(data, "source", ctx)), assumptions=str(data.get("assumptions", "")),
@@ -727,7 +751,7 @@ def load_hand(name: str) -> HandDescription:
         actuators=tuple(actuators), couplings=tuple(couplings),
         wrist_site=_transform(_get(data, "wrist_site", ctx), ctx.sub("wrist_site")),
         tactile=_tactile(data, ctx, {link.name for link in links}, fingers),
-        home=home, fingers=tuple(fingers), grasp_probe=probe,
+        home=home, fingers=tuple(fingers), grasp_probe=probe, tabletop_grasp=tabletop,
         contact_exclude=_excludes(data, ctx, {link.name for link in links}),
         servo_error_at_full_effort=_num(data.get("servo_error_at_full_effort", 0.1), ctx.sub("servo_error_at_full_effort"), True),
         path=path,

@@ -80,7 +80,7 @@ def build_scene(task: TaskSpec, embodiment: str, sample: SceneSample) -> Scene:
         x, y, yaw = sample.object_poses[name]
         z = sample.table_height + resting_height(obj.shape, obj.size) + PLACEMENT_GAP_M
         add_free_object(spec, name, obj.shape, obj.size, obj.mass, obj.friction, obj.rgba,
-                        (x, y, z), yaw_quat(yaw))
+                        (x, y, z), yaw_quat(yaw), rolling_friction=obj.rolling_friction)
     distractor_names = []
     for i, d in enumerate(sample.distractors):
         name = f"distractor_{i}"

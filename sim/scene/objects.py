@@ -23,12 +23,13 @@ def yaw_quat(yaw_deg: float) -> list[float]:
 
 
 def add_free_object(spec: mujoco.MjSpec, name: str, shape: str, size, mass: float, friction: float,
-                    rgba, pos, quat) -> None:
+                    rgba, pos, quat, rolling_friction: float = 0.0) -> None:
     body = spec.worldbody.add_body(name=name, pos=list(pos), quat=list(quat))
     body.add_freejoint(name=f"{name}_free")
+    # condim 6 adds rolling resistance; without it a sphere rolls on forever on a flat plate
     body.add_geom(name=name, type=GEOM_TYPES[shape], size=_pad_size(size), mass=mass,
-                  friction=[friction, 0.01, 0.0005], rgba=list(rgba), condim=4,
-                  solref=[0.004, 1.0])
+                  friction=[friction, 0.01, rolling_friction], rgba=list(rgba),
+                  condim=6 if rolling_friction > 0 else 4, solref=[0.004, 1.0])
 
 
 def _pad_size(size) -> list[float]:
