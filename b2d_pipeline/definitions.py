@@ -26,5 +26,7 @@ def build_definitions(settings: FactorySettings | None = None) -> dg.Definitions
     )
 
 
-os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home()))
-defs = build_definitions()
+_settings = FactorySettings.from_env()
+# DAGSTER_HOME follows B2D_DATA_ROOT, so a separate data root keeps its own run history
+os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home(_settings.data_root)))
+defs = build_definitions(_settings)

@@ -1,5 +1,9 @@
 """The Dagster definitions load, and one materialize() of the whole chain works at the smallest size."""
 
+import os
+import subprocess
+import sys
+
 import dagster as dg
 import pandas as pd
 
@@ -57,3 +61,13 @@ def test_bad_recording_fails_its_partition_and_keeps_the_rest(tmp_path, raw_path
     assert "episode_0001.raw.h5" in str(failure.event_specific_data) and "truncated" in str(failure.event_specific_data)
     assert (tmp_path / "replays" / SETTING / "episode_0000.replay.h5").exists()
     assert not (tmp_path / "replays" / SETTING / "episode_0001.replay.h5").exists()
+
+
+def test_dagster_home_follows_the_data_root(tmp_path):
+    """Without DAGSTER_HOME, a fresh process loading the definitions keeps its run history under
+    B2D_DATA_ROOT (a separate data root never mixes runs with the default one)."""
+    env = {k: v for k, v in os.environ.items() if k != "DAGSTER_HOME"}
+    env["B2D_DATA_ROOT"] = str(tmp_path)
+    out = subprocess.run([sys.executable, "-c", "import os, b2d_pipeline.definitions; print(os.environ['DAGSTER_HOME'])"],
+                         env=env, capture_output=True, text=True, check=True).stdout.strip()
+    assert out == str(tmp_path / "dagster_home")
