@@ -14,12 +14,13 @@ corrects the lowering for a slipped grasp.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
-from sim.embodiment.description import HandDescription, load_embodiment
+from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
 
@@ -42,34 +43,27 @@ STAGGER_STEPS = 120           # the left hand starts later so the hands never me
 SETTLE_STEPS = 45             # after the last release; reach-and-stop ends earlier on success
 
 
-@dataclass
-class HandGrasp:
-    centre: np.ndarray            # object centre in the wrist-site frame
-    targets: dict[str, float]     # unprefixed actuator -> closing target
-    late: tuple[str, ...] = ()    # actuators that close after the others
-    held: tuple[str, ...] = ()    # late actuators that stay closed on release until the hand is clear
-
-
-def hand_grasp(hand: HandDescription, side: str) -> HandGrasp:
-    """The hand's declared palm-down grasp (`tabletop_grasp`, else the `grasp_probe` power grasp),
-    mirrored for the left side."""
+def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
+    """The hand's declared palm-down grasp (`tabletop_grasp`, else the `grasp_probe` power grasp
+    with no staged closing), its object centre mirrored for the left side."""
     if hand.tabletop_grasp is not None:
-        g = hand.tabletop_grasp
-        return HandGrasp(mirror_vec(g.centre) if side == "left" else np.asarray(g.centre, float),
-                         dict(g.close), tuple(g.late), tuple(g.held))
+        grasp = hand.tabletop_grasp
     elif hand.grasp_probe is not None:
         site = hand.wrist_site
         centre = site.rot.T @ (np.asarray(hand.grasp_probe.pos, float) - site.pos)
-        targets, late = dict(hand.grasp_probe.close), ()
+        grasp = TabletopGrasp(centre=centre, close=dict(hand.grasp_probe.close), late=(), held=())
     else:
-        centre, targets, late = np.zeros(3), {}, ()
-    return HandGrasp(mirror_vec(centre) if side == "left" else centre, targets, late)
+        grasp = TabletopGrasp(centre=np.zeros(3), close={}, late=(), held=())
+    return dataclasses.replace(grasp, centre=mirror_vec(grasp.centre)) if side == "left" else grasp
 
 
 def _quat(R: np.ndarray) -> np.ndarray:
     q = np.zeros(4)
     mujoco.mju_mat2Quat(q, R.flatten())
     return q
+
+
+PALM_DOWN_QUAT = _quat(PALM_DOWN)
 
 
 def _slerp(q0: np.ndarray, q1: np.ndarray, s: float) -> np.ndarray:
@@ -141,13 +135,13 @@ class ScriptedOperator:
             group = np.zeros(len(hand_ids), int)       # index into the closure triple
             for i, name in enumerate(lay.hand_actuators):
                 short = name.removeprefix(f"{side}_")
-                if short in grasp.targets:
-                    closed[i] = np.clip(grasp.targets[short], lo[i], hi[i])
+                if short in grasp.close:
+                    closed[i] = np.clip(grasp.close[short], lo[i], hi[i])
                 group[i] = 2 if short in grasp.held else 1 if short in grasp.late else 0
             q_home = self.ctrl_home[arm_ids]
             pos0, quat0 = kin.fk(q_home)
             start = STAGGER_STEPS if side == "left" else 0
-            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_, "wrist_site": lay.wrist_site,
+            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_, "wrist_site_id": model.site(lay.wrist_site).id,
                                 "closed": closed, "group": group, "grasp_centre": grasp.centre, "corrections": [],
                                 "q": q_home.copy(),
                                 "timeline": SideTimeline(pos0, quat0, start), "home": (pos0, quat0)}
@@ -166,17 +160,16 @@ class ScriptedOperator:
         task = self.scene.task
         obj = task.objects[item["pick"]]
         half_z = obj.half_extents[2]
-        rot, quat = PALM_DOWN, _quat(PALM_DOWN)
         # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
         cx, cy, cz = side["grasp_centre"]
-        offset = rot @ np.array([cx, max(cy, half_z + PALM_CLEARANCE_M), cz])
+        offset = PALM_DOWN @ np.array([cx, max(cy, half_z + PALM_CLEARANCE_M), cz])
         grasp = self._object_pos(data, item["pick"]) - offset
         target = task.objects[item["place"]]
         place_xy = self._object_pos(data, item["place"])[:2] + np.asarray(item.get("place_offset", [0, 0]))
         place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + half_z + RELEASE_GAP_M)
         place = np.array([*place_xy, place_z]) - offset
         up = np.array([0, 0, 1.0])
-        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=quat, closure=OPEN)
+        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=PALM_DOWN_QUAT, closure=OPEN)
         tl.add(DURATIONS["descend"], pos=grasp)
         tl.add(DURATIONS["close"], closure=WALL)
         tl.add(DURATIONS["close_late"], closure=CLOSED)
@@ -194,7 +187,7 @@ class ScriptedOperator:
     def _correct_place(self, side: dict, data: mujoco.MjData, step: int) -> None:
         while side["corrections"] and side["corrections"][0][0] <= step:
             _, name, planned_offset, first = side["corrections"].pop(0)
-            wrist = data.site_xpos[self.scene.model.site(side["wrist_site"]).id]
+            wrist = data.site_xpos[side["wrist_site_id"]]
             error = (self._object_pos(data, name) - wrist) - planned_offset
             error[2] = 0.0      # height is set by the release gap
             for frame in side["timeline"].frames[first:first + 3]:    # lower, open, retreat

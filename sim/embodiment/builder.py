@@ -365,7 +365,7 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
         )
         # the hand base is rigidly on the last arm link: the palm and the links hinged on it
         # (finger bases, thumb base, links near the wrist) cannot meaningfully touch the last two arm links
-        near = [lk.name for lk, T in ((lk, hand_poses[lk.name]) for lk in hand.links) if np.linalg.norm(T.pos) < WRIST_NEAR_M]
+        near = [lk.name for lk in hand.links if np.linalg.norm(hand_poses[lk.name].pos) < WRIST_NEAR_M]
         for b in [p + n for n in near] + [p + lk.name for lk in links if lk.parent == links[0].name]:
             excludes += [(arm_bodies[-1], b), (arm_bodies[-2], b)]
     seen = set()

@@ -672,6 +672,12 @@ def _tactile(data: dict, ctx: _Ctx, link_names: set[str], fingers: list[str]) ->
     )
 
 
+def _check_actuators(keys, act_names: set[str], ctx: _Ctx) -> None:
+    for k in keys:
+        if k not in act_names:
+            ctx.fail(f"{k!r} is not an actuator of this hand {sorted(act_names)}")
+
+
 @functools.lru_cache(maxsize=None)
 def load_hand(name: str) -> HandDescription:
     path = _resolve(HANDS_DIR, name, "hand")
@@ -714,15 +720,13 @@ def load_hand(name: str) -> HandDescription:
     for k in home:
         if k not in joint_names:
             ctx.sub("home").fail(f"{k!r} is not a joint of this hand")
+    act_names = {a.name for a in actuators}
     probe = None
     if "grasp_probe" in data:
         g = data["grasp_probe"]
         gctx = ctx.sub("grasp_probe")
         close = {str(k): float(v) for k, v in _get(g, "close", gctx).items()}
-        act_names = {a.name for a in actuators}
-        for k in close:
-            if k not in act_names:
-                gctx.sub("close").fail(f"{k!r} is not an actuator of this hand")
+        _check_actuators(close, act_names, gctx.sub("close"))
         probe = GraspProbe(
             radius=_num(_get(g, "radius", gctx), gctx.sub("radius"), True),
             half_length=_num(_get(g, "half_length", gctx), gctx.sub("half_length"), True),
@@ -735,14 +739,11 @@ def load_hand(name: str) -> HandDescription:
     if "tabletop_grasp" in data:
         g = data["tabletop_grasp"]
         gctx = ctx.sub("tabletop_grasp")
-        act_names = {a.name for a in actuators}
         close = {str(k): float(v) for k, v in _get(g, "close", gctx).items()}
         late = tuple(str(k) for k in g.get("late", []))
         held = tuple(str(k) for k in g.get("held", []))
         for field_name, keys in (("close", close), ("late", late), ("held", held)):
-            for k in keys:
-                if k not in act_names:
-                    gctx.sub(field_name).fail(f"{k!r} is not an actuator of this hand {sorted(act_names)}")
+            _check_actuators(keys, act_names, gctx.sub(field_name))
         tabletop = TabletopGrasp(centre=_vec(_get(g, "centre", gctx), 3, gctx.sub("centre")), close=close, late=late, held=held)
     return HandDescription(
         name=str(data.get("name", name)), display_name=str(data.get("display_name", name)),
