@@ -141,10 +141,11 @@ class ScriptedOperator:
             q_home = self.ctrl_home[arm_ids]
             pos0, quat0 = kin.fk(q_home)
             start = STAGGER_STEPS if side == "left" else 0
-            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_, "wrist_site_id": model.site(lay.wrist_site).id,
-                                "closed": closed, "group": group, "grasp_centre": grasp.centre, "corrections": [],
-                                "q": q_home.copy(),
-                                "timeline": SideTimeline(pos0, quat0, start), "home": (pos0, quat0)}
+            self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
+                                "closed": closed, "group": group, "grasp_centre": grasp.centre,
+                                "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [],
+                                "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, start),
+                                "home": (pos0, quat0)}
         for item in scene.task.demo_plan:
             self._plan_pick_place(data, item)
         for side in self.sides.values():
@@ -177,20 +178,22 @@ class ScriptedOperator:
         tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * up)
         tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * up)
         # above the target the operator looks where the object really sits in the hand (it may
-        # have slipped while carried) and corrects the lower .. retreat keyframes for it
-        side["corrections"].append((tl.end, item["pick"], offset, len(tl.frames)))
+        # have slipped while carried) and corrects every later keyframe of this pick for it
+        first = len(tl.frames)
         tl.add(DURATIONS["lower"], pos=place)
         tl.add(DURATIONS["open"], closure=RELEASED)
         tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
         tl.add(DURATIONS["open"], closure=OPEN)
+        carried_at = tl.frames[first - 1].end_step
+        side["corrections"].append((carried_at, item["pick"], offset, slice(first, len(tl.frames))))
 
     def _correct_place(self, side: dict, data: mujoco.MjData, step: int) -> None:
         while side["corrections"] and side["corrections"][0][0] <= step:
-            _, name, planned_offset, first = side["corrections"].pop(0)
+            _, name, planned_offset, frames = side["corrections"].pop(0)
             wrist = data.site_xpos[side["wrist_site_id"]]
             error = (self._object_pos(data, name) - wrist) - planned_offset
             error[2] = 0.0      # height is set by the release gap
-            for frame in side["timeline"].frames[first:first + 3]:    # lower, open, retreat
+            for frame in side["timeline"].frames[frames]:    # lower .. the end of this pick
                 frame.pos = frame.pos - error
 
     def act(self, step: int, data: mujoco.MjData) -> np.ndarray:
