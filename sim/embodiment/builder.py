@@ -238,7 +238,8 @@ def _home_arm(name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
                 break
         if best is None:
             raise ValueError(f"{emb.path}: field 'home.right_wrist': the {side} arm cannot reach the home "
-                             f"wrist pose {target.pos.tolist()} (IK failed from the arm's home_seed)")
+                             f"wrist pose {target.pos.tolist()} (IK failed from every home seed: "
+                             f"the embodiment's, then the arm's)")
         out.append(tuple(float(v) for v in best.q))
     return out[0], out[1]
 
