@@ -8,8 +8,8 @@ from sim.registry import channel_names, paper_settings
 
 
 def setting_keys() -> list[str]:
-    """The paper's settings whose task and embodiment files are in the catalog."""
-    return [s.key for s in paper_settings() if s.available]
+    """The paper's available settings that the scripted operator can demonstrate (a demo_plan)."""
+    return [s.key for s in paper_settings() if s.recordable]
 
 
 settings_partitions = dg.StaticPartitionsDefinition(setting_keys())

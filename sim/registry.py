@@ -171,6 +171,7 @@ def channel_names() -> list[str]:
 class Setting:
     task: str
     embodiment: str
+    marked_available: bool = True    # settings.yaml's flag: the task builds on this embodiment
 
     @property
     def key(self) -> str:
@@ -178,14 +179,28 @@ class Setting:
 
     @property
     def available(self) -> bool:
-        """True when both the task and the embodiment files are in the catalog."""
-        return self.task in names("tasks") and self.embodiment in names("embodiments")
+        """Marked available and both the task and the embodiment files are in the catalog."""
+        return self.marked_available and self.task in names("tasks") and self.embodiment in names("embodiments")
+
+    @property
+    def recordable(self) -> bool:
+        """Available and its task has a demonstration plan for the scripted operator."""
+        if not self.available:
+            return False
+        from sim.tasks import load_task     # tasks import the registry: load lazily
+        return bool(load_task(self.task).demo_plan)
 
 
 @lru_cache(maxsize=1)
 def paper_settings() -> tuple[Setting, ...]:
-    raw = load_yaml(CATALOG / "settings.yaml")
-    return tuple(Setting(s["task"], s["embodiment"]) for s in raw["paper_settings"])
+    path = CATALOG / "settings.yaml"
+    out = []
+    for i, s in enumerate(load_yaml(path)["paper_settings"]):
+        flag = s.get("available", False)
+        if not isinstance(flag, bool):
+            raise SpecError(path, f"paper_settings[{i}].available", "true or false", flag)
+        out.append(Setting(s["task"], s["embodiment"], flag))
+    return tuple(out)
 
 
 def parse_setting_key(key: str) -> Setting:
@@ -195,7 +210,8 @@ def parse_setting_key(key: str) -> Setting:
     task, embodiment = key.split(SETTING_SEPARATOR, 1)
     validate_name("task", task)
     validate_name("embodiment", embodiment)
-    return Setting(task, embodiment)
+    listed = {s.key: s for s in paper_settings()}
+    return listed.get(key, Setting(task, embodiment))
 
 
 def validate_name(kind: str, name: str) -> str:

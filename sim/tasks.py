@@ -1,8 +1,9 @@
 """Task descriptions loaded from `sim/catalog/tasks/<name>.yaml`.
 
-A task declares its table, its objects (primitive shapes built by b2d, or a mesh file), where they
-start (a pose or a placement zone), its scripted demonstration plan and its `metrics` block, which
-the shared evaluator compiles. No task needs Python of its own.
+A task declares its table, its objects (primitives and generated shapes built by b2d, fixed or free,
+with articulated links), where they start (a pose or a placement zone), an optional scripted
+demonstration plan and its `metrics` block, which the shared evaluator compiles at load time. No
+task needs Python of its own.
 """
 
 from __future__ import annotations
@@ -14,17 +15,31 @@ from pathlib import Path
 import numpy as np
 
 from sim.errors import SpecError
-from sim.registry import catalog_path, load_yaml
+from evaluation import EpisodeEvaluator, TaskContext, TaskSpecError
+from evaluation.state import ObjectInfo
+from sim.registry import catalog_path, load_yaml, names
+from sim.scene.articulated import LinkSpec, parse_links
+from sim.scene.parts import Part, num_list, parse_parts, parts_aabb
 
 DEFAULT_TABLE_HEIGHT = 0.75
-SHAPE_SIZE_LEN = {"box": 3, "cylinder": 2, "sphere": 1, "ellipsoid": 3, "capsule": 2}
+OBJECT_KEYS = ("shape", "size", "parts", "mass", "friction", "rolling_friction", "rgba", "pose", "zone",
+               "fixed_pose", "container", "base", "links", "key_rows", "mouth_axis", "tool")
+BASES = ("free", "fixed")          # fixed: the base is part of the world (fridge, toilet, piano)
+CENTRE_TOLERANCE_M = 0.005
+
+
+@dataclass(frozen=True)
+class ToolSpec:
+    """Tool annotation: what the tool is for and its functional point (hammer head, ladle bowl)."""
+    role: str
+    point: tuple[float, float, float]     # object frame
 
 
 @dataclass(frozen=True)
 class ObjectSpec:
     name: str
-    shape: str                    # box | cylinder | sphere | ellipsoid | capsule
-    size: tuple[float, ...]       # MuJoCo geom size convention for the shape
+    shape: str                    # box | cylinder | sphere | ellipsoid | capsule, or "compound" (parts)
+    size: tuple[float, ...]       # MuJoCo geom size convention for the shape; () when compound
     mass: float
     friction: float
     rgba: tuple[float, float, float, float]
@@ -35,22 +50,45 @@ class ObjectSpec:
     interior_half_extents: tuple[float, float, float] | None = None
     interior_offset: tuple[float, float, float] | None = None
     rolling_friction: float = 0.0         # metres; > 0 resists rolling (soft, not perfectly round objects)
+    parts: tuple[Part, ...] = ()          # the base body's primitives, in the object frame
+    links: tuple[LinkSpec, ...] = ()      # articulated links (joints "<name>/<link>")
+    base: str = "free"
+    mouth_axis: tuple[float, float, float] | None = None   # pourers: local axis of the mouth
+    tool: ToolSpec | None = None
+    on: str | None = None                 # pose.support: starts on this object, xy/yaw in its frame
+
+    @property
+    def support_height(self) -> float:
+        """Height, in the object frame, of what an object put `on` it stands on: the cavity floor of
+        a container, else the top of its box."""
+        if self.interior_half_extents is not None:
+            return float(self.interior_offset[2] - self.interior_half_extents[2])
+        return float(self.half_extents[2])
 
     @property
     def half_extents(self) -> np.ndarray:
-        s = self.size
-        return np.array({
-            "box": (s[0], s[1], s[2]) if len(s) == 3 else (0, 0, 0),
-            "cylinder": (s[0], s[0], s[-1]),
-            "sphere": (s[0],) * 3,
-            "ellipsoid": tuple(s[:3]) if len(s) == 3 else (0, 0, 0),
-            "capsule": (s[0], s[0], s[-1] + s[0]),
-        }[self.shape], dtype=float)
+        """Half sizes of the base's bounding box around the object frame (the evaluator's box)."""
+        lo, hi = parts_aabb(self.parts)
+        return (hi - lo) / 2
+
+    @property
+    def rest_height(self) -> float:
+        """Height of the object frame above its support when upright (links at joint zero included)."""
+        return float(-self._aabb_all()[0][2])
 
     @property
     def footprint_radius(self) -> float:
-        """Radius of the object's xy footprint, for collision-free placement."""
-        return float(np.hypot(*self.half_extents[:2]))
+        """Radius of the object's xy footprint, links included, for collision-free placement."""
+        lo, hi = self._aabb_all()
+        return float(np.hypot(*np.maximum(-lo[:2], hi[:2])))
+
+    def _aabb_all(self) -> tuple[np.ndarray, np.ndarray]:
+        boxes = [parts_aabb(self.parts)] + [parts_aabb(l.parts, l.pos, l.quat) for l in self.links]
+        return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [f"{self.name}/{link.name}" for link in self.links]
 
 
 @dataclass(frozen=True)
@@ -78,49 +116,10 @@ class TaskSpec:
     raw: dict = field(repr=False, default_factory=dict)
 
 
-def _num_list(path, fld, value, length=None):
-    if not isinstance(value, (list, tuple)) or not all(isinstance(v, (int, float)) for v in value):
-        raise SpecError(path, fld, "a list of numbers", value)
-    if length is not None and len(value) != length:
-        raise SpecError(path, fld, f"{length} numbers", value)
-    return tuple(float(v) for v in value)
-
-
-def _parse_object(path, name, raw, zones) -> ObjectSpec:
-    where = f"objects.{name}"
-    if not isinstance(raw, dict):
-        raise SpecError(path, where, "a mapping", raw)
-    shape = raw.get("shape")
-    if shape not in SHAPE_SIZE_LEN:
-        raise SpecError(path, f"{where}.shape", f"one of {sorted(SHAPE_SIZE_LEN)}", shape)
-    size = _num_list(path, f"{where}.size", raw.get("size"), SHAPE_SIZE_LEN[shape])
-    pose = raw.get("pose")
-    zone = raw.get("zone")
-    if (pose is None) == (zone is None):
-        raise SpecError(path, where, "exactly one of 'pose' or 'zone'")
-    if zone is not None and zone not in zones:
-        raise SpecError(path, f"{where}.zone", f"a zone from {sorted(zones)}", zone)
-    xy = _num_list(path, f"{where}.pose.xy", pose["xy"], 2) if pose else None
-    container = raw.get("container") or {}
-    return ObjectSpec(
-        name=name,
-        shape=shape,
-        size=size,
-        mass=float(raw.get("mass", 0.1)),
-        friction=float(raw.get("friction", 1.0)),
-        rgba=_num_list(path, f"{where}.rgba", raw.get("rgba", [0.7, 0.7, 0.7, 1.0]), 4),
-        xy=xy,
-        yaw_deg=float((pose or {}).get("yaw_deg", 0.0)),
-        zone=zone,
-        fixed_pose=bool(raw.get("fixed_pose", False)),
-        rolling_friction=_non_negative(path, f"{where}.rolling_friction", raw.get("rolling_friction", 0.0)),
-        interior_half_extents=(_num_list(path, f"{where}.container.interior_half_extents",
-                                         container["interior_half_extents"], 3)
-                               if container else None),
-        interior_offset=(_num_list(path, f"{where}.container.interior_offset",
-                                   container.get("interior_offset", [0, 0, 0]), 3)
-                         if container else None),
-    )
+    @property
+    def joint_names(self) -> list[str]:
+        """Every articulated joint, "<object>/<link>", as the evaluator names them."""
+        return [j for o in self.objects.values() for j in o.joint_names]
 
 
 def _non_negative(path: Path, field: str, value) -> float:
@@ -129,13 +128,111 @@ def _non_negative(path: Path, field: str, value) -> float:
     return float(value)
 
 
-def parse_task(raw: dict, path: Path) -> TaskSpec:
-    for key in ("name", "instruction", "objects", "metrics"):
-        if key not in raw:
-            raise SpecError(path, key, "a value")
+def _geometry(path, where, raw) -> tuple[str, tuple, tuple[Part, ...], object]:
+    """shape + size (one primitive) or parts (primitives and generated shapes)."""
+    if ("parts" in raw) == ("shape" in raw or "size" in raw):
+        raise SpecError(path, where, "either 'shape' and 'size' (one primitive) or 'parts'")
+    if "parts" in raw:
+        parts, cavity = parse_parts(path, f"{where}.parts", raw["parts"])
+        return "compound", (), parts, cavity
+    (part,), _ = parse_parts(path, where, [{"shape": raw.get("shape"), "size": raw.get("size")}])
+    return part.shape, part.size, (part,), None
+
+
+def _parse_object(path, name, raw, zones, earlier) -> ObjectSpec:
+    where = f"objects.{name}"
+    if not isinstance(raw, dict):
+        raise SpecError(path, where, "a mapping", raw)
+    for key in raw:
+        if key not in OBJECT_KEYS:
+            raise SpecError(path, f"{where}.{key}", f"an object key {list(OBJECT_KEYS)}")
+    shape, size, parts, cavity = _geometry(path, where, raw)
+    lo, hi = parts_aabb(parts)
+    if np.abs((lo + hi) / 2).max() > CENTRE_TOLERANCE_M:
+        raise SpecError(path, f"{where}.parts", "parts centred on the object frame (the evaluator's box "
+                        f"centre); shift them by {(-(lo + hi) / 2).round(4).tolist()}")
+    pose = raw.get("pose")
+    zone = raw.get("zone")
+    if (pose is None) == (zone is None):
+        raise SpecError(path, where, "exactly one of 'pose' or 'zone'")
+    if zone is not None and zone not in zones:
+        raise SpecError(path, f"{where}.zone", f"a zone from {sorted(zones)}", zone)
+    if pose is not None and not isinstance(pose, dict):
+        raise SpecError(path, f"{where}.pose", "a mapping {xy, yaw_deg}", pose)
+    for key in pose or {}:
+        if key not in ("xy", "yaw_deg", "support"):
+            raise SpecError(path, f"{where}.pose.{key}", "a pose key ['xy', 'yaw_deg', 'support']")
+    xy = num_list(path, f"{where}.pose.xy", pose.get("xy"), 2) if pose else None
+    on = (pose or {}).get("support")      # starts standing on this object ("on" is a YAML boolean)
+    if on is not None and on not in earlier:
+        raise SpecError(path, f"{where}.pose.support", f"an object declared before {name!r}: {sorted(earlier)}", on)
+    base = raw.get("base", "free")
+    if base not in BASES:
+        raise SpecError(path, f"{where}.base", f"one of {list(BASES)}", base)
+    container = raw.get("container")
+    if container is not None:
+        if not isinstance(container, dict) or "interior_half_extents" not in container:
+            raise SpecError(path, f"{where}.container", "a mapping {interior_half_extents, interior_offset}", container)
+        interior = num_list(path, f"{where}.container.interior_half_extents", container["interior_half_extents"], 3)
+        offset = num_list(path, f"{where}.container.interior_offset", container.get("interior_offset", [0, 0, 0]), 3)
+    elif cavity is not None:      # a generated open shape brings its own cavity
+        interior, offset = cavity.half_extents, cavity.offset
+    else:
+        interior = offset = None
+    tool = raw.get("tool")
+    if tool is not None:
+        if not isinstance(tool, dict) or not isinstance(tool.get("role"), str):
+            raise SpecError(path, f"{where}.tool", "a mapping {role: text, point: [x, y, z]}", tool)
+        tool = ToolSpec(tool["role"], num_list(path, f"{where}.tool.point", tool.get("point"), 3))
+    mass = _non_negative(path, f"{where}.mass", raw.get("mass", 0.1))
+    if mass <= 0:
+        raise SpecError(path, f"{where}.mass", "a positive mass (kg)", mass)
+    return ObjectSpec(
+        name=name,
+        shape=shape,
+        size=size,
+        mass=mass,
+        friction=_non_negative(path, f"{where}.friction", raw.get("friction", 1.0)),
+        rgba=num_list(path, f"{where}.rgba", raw.get("rgba", [0.7, 0.7, 0.7, 1.0]), 4),
+        xy=xy,
+        yaw_deg=float((pose or {}).get("yaw_deg", 0.0)),
+        zone=zone,
+        fixed_pose=bool(raw.get("fixed_pose", False)),
+        rolling_friction=_non_negative(path, f"{where}.rolling_friction", raw.get("rolling_friction", 0.0)),
+        interior_half_extents=interior,
+        interior_offset=offset,
+        parts=parts,
+        links=parse_links(path, where, raw),
+        base=base,
+        mouth_axis=num_list(path, f"{where}.mouth_axis", raw["mouth_axis"], 3) if "mouth_axis" in raw else None,
+        tool=tool,
+        on=on,
+    )
+
+
+def _parse_zones(path, raw) -> dict[str, dict]:
     zones = raw.get("zones") or {}
-    objects = {n: _parse_object(path, n, o, zones) for n, o in raw["objects"].items()}
-    table = raw.get("table") or {}
+    for name, zone in zones.items():
+        ok = isinstance(zone, dict) and (set(zone) == {"xy_min", "xy_max"} or set(zone) == {"center_xy", "radius"})
+        if not ok:
+            raise SpecError(path, f"zones.{name}", "{xy_min: [x, y], xy_max: [x, y]} or {center_xy: [x, y], radius: r}",
+                            zone)
+        for key, value in zone.items():
+            if key == "radius":
+                _non_negative(path, f"zones.{name}.radius", value)
+            else:
+                num_list(path, f"zones.{name}.{key}", value, 2)
+    return zones
+
+
+def _parse_points(path, raw) -> dict[str, list]:
+    points = raw.get("points") or {}
+    for name, p in points.items():
+        num_list(path, f"points.{name}", p, 3)
+    return points
+
+
+def _parse_plan(path, raw, objects) -> list[dict]:
     plan = raw.get("demo_plan") or []
     for i, step in enumerate(plan):
         for key in ("hand", "pick", "place"):
@@ -147,26 +244,62 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
             if step[key] not in objects:
                 raise SpecError(path, f"demo_plan[{i}].{key}", f"an object from {sorted(objects)}",
                                 step[key])
-    return TaskSpec(
+    return plan
+
+
+def task_context(task: TaskSpec) -> TaskContext:
+    """The evaluator's static view of a task: object boxes and cavities, zones, table-relative
+    points and the articulated joints."""
+    infos = {}
+    for name, obj in task.objects.items():
+        arr = lambda v: None if v is None else np.array(v, dtype=float)  # noqa: E731
+        infos[name] = ObjectInfo(name=name, half_extents=obj.half_extents,
+                                 interior_half_extents=arr(obj.interior_half_extents),
+                                 interior_offset=arr(obj.interior_offset), mouth_axis=arr(obj.mouth_axis))
+    points = {k: np.asarray(v, dtype=float) for k, v in task.points.items()}
+    return TaskContext(objects=infos, zones=task.zones, points=points, table_relative_points=frozenset(points),
+                       joints=frozenset(task.joint_names))
+
+
+def parse_task(raw: dict, path: Path) -> TaskSpec:
+    for key in ("name", "instruction", "objects", "metrics"):
+        if key not in raw:
+            raise SpecError(path, key, "a value")
+    if not isinstance(raw["objects"], dict) or not raw["objects"]:
+        raise SpecError(path, "objects", "a mapping of object name -> object", raw["objects"])
+    zones = _parse_zones(path, raw)
+    objects: dict[str, ObjectSpec] = {}
+    for n, o in raw["objects"].items():
+        objects[n] = _parse_object(path, n, o, zones, dict(objects))
+    table = raw.get("table") or {}
+    embodiment = raw.get("paper_embodiment", "")
+    if embodiment and embodiment not in names("embodiments"):
+        raise SpecError(path, "paper_embodiment", f"an embodiment from {names('embodiments')}", embodiment)
+    task = TaskSpec(
         name=raw["name"],
         display_name=raw.get("display_name", raw["name"]),
         instruction=raw["instruction"],
         success_condition=raw.get("success_condition", ""),
-        paper_embodiment=raw.get("paper_embodiment", ""),
+        paper_embodiment=embodiment,
         table=TableSpec(
             height=float(table.get("height", DEFAULT_TABLE_HEIGHT)),
-            size_xy=_num_list(path, "table.size_xy", table.get("size_xy", [1.2, 0.8]), 2),
+            size_xy=num_list(path, "table.size_xy", table.get("size_xy", [1.2, 0.8]), 2),
             thickness=float(table.get("thickness", 0.04)),
             friction=float(table.get("friction", 0.8)),
         ),
         objects=objects,
         zones=zones,
-        points=raw.get("points") or {},
-        demo_plan=plan,
+        points=_parse_points(path, raw),
+        demo_plan=_parse_plan(path, raw, objects),
         metrics=raw["metrics"],
         source=Path(path),
         raw=raw,
     )
+    try:   # compile the metrics block now: a bad predicate, stage graph or name fails at load time
+        EpisodeEvaluator(task.metrics, task_context(task), source=str(path))
+    except TaskSpecError as err:
+        raise SpecError(path, err.field, err.expected, err.got) from err
+    return task
 
 
 @lru_cache(maxsize=64)

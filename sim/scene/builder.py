@@ -11,7 +11,7 @@ import numpy as np
 
 from sim import physics
 from sim.embodiment import add_bimanual_robot
-from sim.scene.objects import add_free_object, resting_height, yaw_quat
+from sim.scene.objects import add_free_object, add_task_object, resting_height, yaw_quat
 from sim.scene.sample import SceneSample
 from sim.tasks import TaskSpec
 
@@ -37,14 +37,31 @@ class Scene:
         return {n: self.model.body(n).id for n in self.object_names + self.distractor_names}
 
     @cached_property
+    def free_object_names(self) -> list[str]:
+        """Task objects and distractors with a free joint (fixed bases have none)."""
+        fixed = {n for n, o in self.task.objects.items() if o.base == "fixed"}
+        return [n for n in self.object_names + self.distractor_names if n not in fixed]
+
+    @cached_property
     def object_qpos_adr(self) -> dict[str, int]:
-        return {n: int(self.model.jnt_qposadr[self.model.joint(f"{n}_free").id])
-                for n in self.object_names + self.distractor_names}
+        return {n: int(self.model.jnt_qposadr[self.model.joint(f"{n}_free").id]) for n in self.free_object_names}
 
     @cached_property
     def object_dof_adr(self) -> dict[str, int]:
-        return {n: int(self.model.jnt_dofadr[self.model.joint(f"{n}_free").id])
-                for n in self.object_names + self.distractor_names}
+        return {n: int(self.model.jnt_dofadr[self.model.joint(f"{n}_free").id]) for n in self.free_object_names}
+
+    @cached_property
+    def joint_names(self) -> list[str]:
+        """Articulated-object joints, "<object>/<link>" (also their link bodies' names)."""
+        return self.task.joint_names
+
+    @cached_property
+    def joint_qpos_adr(self) -> dict[str, int]:
+        return {j: int(self.model.jnt_qposadr[self.model.joint(j).id]) for j in self.joint_names}
+
+    @cached_property
+    def joint_initial(self) -> dict[str, float]:
+        return {f"{o.name}/{link.name}": link.joint.initial for o in self.task.objects.values() for link in o.links}
 
     @cached_property
     def robot_qpos_adr(self) -> np.ndarray:
@@ -59,9 +76,12 @@ class Scene:
         return self.sample.table_height
 
     def home_data(self) -> mujoco.MjData:
-        """Objects at their sampled poses, robot at its home configuration, home targets held."""
+        """Objects at their sampled poses with their joints at the task's initial values, robot at its
+        home configuration, home targets held."""
         data = mujoco.MjData(self.model)
         data.qpos[self.robot_qpos_adr] = self.layout.home_qpos
+        for joint, q in self.joint_initial.items():
+            data.qpos[self.joint_qpos_adr[joint]] = q
         data.ctrl[:] = self.layout.home_ctrl
         mujoco.mj_forward(self.model, data)
         return data
@@ -76,11 +96,15 @@ def build_scene(task: TaskSpec, embodiment: str, sample: SceneSample) -> Scene:
     _add_background(spec, sample.background)
     _add_lighting(spec, sample.lighting)
     _add_table(spec, task, sample)
+    frame_z: dict[str, float] = {}
     for name, obj in task.objects.items():
         x, y, yaw = sample.object_poses[name]
-        z = sample.table_height + resting_height(obj.shape, obj.size) + PLACEMENT_GAP_M
-        add_free_object(spec, name, obj.shape, obj.size, obj.mass, obj.friction, obj.rgba,
-                        (x, y, z), yaw_quat(yaw), rolling_friction=obj.rolling_friction)
+        # a fixed base sits on its support; a free one is dropped from just above it
+        gap = 0.0 if obj.base == "fixed" else PLACEMENT_GAP_M
+        support = (frame_z[obj.on] + task.objects[obj.on].support_height if obj.on is not None
+                   else sample.table_height)
+        frame_z[name] = support + obj.rest_height + gap
+        add_task_object(spec, obj, (x, y, frame_z[name]), yaw_quat(yaw))
     distractor_names = []
     for i, d in enumerate(sample.distractors):
         name = f"distractor_{i}"

@@ -1,20 +1,23 @@
-"""Task objects as MuJoCo bodies and as meshes for tactile ray casting.
-
-Physics uses MuJoCo primitives (robust contacts); tactile rays hit a trimesh of the same primitive
-built finely enough that faceting stays well below the tactile depth resolution.
+"""Task objects as MuJoCo bodies: a base body (free, or fixed in the world) carrying the object's
+primitive parts, plus its articulated links. Tactile meshes of the same parts are in
+`sim.scene.meshes`.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 import trimesh
 
-GEOM_TYPES = {
-    "box": mujoco.mjtGeom.mjGEOM_BOX, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
-    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
-    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
-}
+from sim.scene.articulated import add_links
+from sim.scene.parts import GEOM_TYPES, pad_size, part_masses, primitive_mesh
+
+if TYPE_CHECKING:
+    from sim.tasks import ObjectSpec
+
+OBJECT_SOLREF = [0.004, 1.0]
 
 
 def yaw_quat(yaw_deg: float) -> list[float]:
@@ -22,39 +25,42 @@ def yaw_quat(yaw_deg: float) -> list[float]:
     return [float(np.cos(half)), 0.0, 0.0, float(np.sin(half))]
 
 
+def _contact(rolling_friction: float) -> dict:
+    # condim 6 adds rolling resistance; without it a sphere rolls on forever on a flat plate
+    return {"condim": 6 if rolling_friction > 0 else 4, "solref": OBJECT_SOLREF}
+
+
 def add_free_object(spec: mujoco.MjSpec, name: str, shape: str, size, mass: float, friction: float,
                     rgba, pos, quat, rolling_friction: float = 0.0) -> None:
+    """A one-primitive free body (distractors)."""
     body = spec.worldbody.add_body(name=name, pos=list(pos), quat=list(quat))
     body.add_freejoint(name=f"{name}_free")
-    # condim 6 adds rolling resistance; without it a sphere rolls on forever on a flat plate
-    body.add_geom(name=name, type=GEOM_TYPES[shape], size=_pad_size(size), mass=mass,
-                  friction=[friction, 0.01, rolling_friction], rgba=list(rgba),
-                  condim=6 if rolling_friction > 0 else 4, solref=[0.004, 1.0])
+    body.add_geom(name=name, type=GEOM_TYPES[shape], size=pad_size(size), mass=mass,
+                  friction=[friction, 0.01, rolling_friction], rgba=list(rgba), **_contact(rolling_friction))
 
 
-def _pad_size(size) -> list[float]:
-    return [float(v) for v in size] + [0.0] * (3 - len(size))
+def add_task_object(spec: mujoco.MjSpec, obj: ObjectSpec, pos, quat) -> None:
+    """The object's body at pos/quat: a free joint unless its base is fixed, one geom per part
+    (mass shared by volume) and its links. A one-part object's geom carries the object's name."""
+    body = spec.worldbody.add_body(name=obj.name, pos=list(pos), quat=list(quat))
+    if obj.base == "free":
+        body.add_freejoint(name=f"{obj.name}_free")
+    contact = _contact(obj.rolling_friction)
+    single = len(obj.parts) == 1
+    for k, (part, mass) in enumerate(zip(obj.parts, part_masses(obj.parts, obj.mass))):
+        body.add_geom(name=obj.name if single else f"{obj.name}/{k}", type=GEOM_TYPES[part.shape],
+                      size=pad_size(part.size), pos=list(part.pos), quat=list(part.quat), mass=mass,
+                      friction=[obj.friction, 0.01, obj.rolling_friction], rgba=list(part.rgba or obj.rgba),
+                      **contact)
+    add_links(spec, body, obj.name, obj.links, obj.friction, obj.rgba, {"condim": 4, "solref": OBJECT_SOLREF})
 
 
 def resting_height(shape: str, size) -> float:
-    """Half-height of the object above its support when upright."""
+    """Half-height of a primitive above its support when upright."""
     return {"box": size[-1] if len(size) == 3 else 0, "cylinder": size[-1], "sphere": size[0],
             "ellipsoid": size[-1], "capsule": size[-1] + size[0]}[shape]
 
 
 def object_mesh(shape: str, size) -> trimesh.Trimesh:
-    """A watertight mesh of the primitive in the object's local frame (MuJoCo conventions:
-    cylinders and capsules along z, sizes are half-lengths)."""
-    if shape == "box":
-        return trimesh.creation.box(extents=2 * np.asarray(size[:3]))
-    if shape == "sphere":
-        return trimesh.creation.icosphere(subdivisions=4, radius=size[0])
-    if shape == "ellipsoid":
-        mesh = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
-        mesh.apply_scale(np.asarray(size[:3]))
-        return mesh
-    if shape == "cylinder":
-        return trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=96)
-    if shape == "capsule":
-        return trimesh.creation.capsule(radius=size[0], height=2 * size[1], count=[48, 48])
-    raise ValueError(f"no mesh for shape '{shape}'")
+    """A watertight mesh of one primitive in its own frame (see `sim.scene.parts.primitive_mesh`)."""
+    return primitive_mesh(shape, size)

@@ -67,11 +67,15 @@ def _overlaps(xy, radius, placed) -> bool:
 
 def sample_object_poses(task: TaskSpec, rng: np.random.Generator) -> dict[str, list[float]]:
     """Explicit poses get +-2 cm / +-10 deg, shrunk on collision; zoned objects are drawn in
-    their zone; the nominal pose is kept only when nothing valid is found."""
+    their zone; the nominal pose is kept only when nothing valid is found. An object `on` another
+    keeps its offset in that object's frame (it moves with it)."""
     placed: list[tuple[tuple[float, float], float]] = []
     poses: dict[str, list[float]] = {}
     for name, obj in task.objects.items():
         radius = obj.footprint_radius
+        if obj.on is not None:
+            poses[name] = [round(v, 6) for v in _on_pose(poses[obj.on], obj)]
+            continue
         if obj.zone is not None:
             zone = task.zones[obj.zone]
             lo, hi = np.array(zone["xy_min"]), np.array(zone["xy_max"])
@@ -96,8 +100,21 @@ def sample_object_poses(task: TaskSpec, rng: np.random.Generator) -> dict[str, l
     return poses
 
 
+def _on_pose(support: list[float], obj) -> list[float]:
+    yaw = np.deg2rad(support[2])
+    dx, dy = obj.xy
+    return [support[0] + np.cos(yaw) * dx - np.sin(yaw) * dy, support[1] + np.sin(yaw) * dx + np.cos(yaw) * dy,
+            support[2] + obj.yaw_deg]
+
+
 def nominal_object_poses(task: TaskSpec) -> dict[str, list[float]]:
-    return {n: [o.xy[0], o.xy[1], o.yaw_deg] for n, o in task.objects.items() if o.xy is not None}
+    poses: dict[str, list[float]] = {}
+    for n, o in task.objects.items():
+        if o.on is not None and o.on in poses:
+            poses[n] = _on_pose(poses[o.on], o)
+        elif o.xy is not None and o.on is None:
+            poses[n] = [o.xy[0], o.xy[1], o.yaw_deg]
+    return poses
 
 
 def sample_table_height(task: TaskSpec, rng: np.random.Generator) -> float:

@@ -7,8 +7,9 @@ from functools import cached_property
 import mujoco
 import numpy as np
 
-from evaluation.state import ObjectInfo, ObjectState, SceneState, TaskContext
+from evaluation.state import ObjectState, SceneState, TaskContext
 from sim.scene.builder import Scene
+from sim.tasks import task_context
 
 
 class SceneObserver:
@@ -20,6 +21,8 @@ class SceneObserver:
         self._owner = np.full(model.nbody, "", dtype=object)   # body id -> evaluator name
         for name, bid in scene.object_body_ids.items():
             self._owner[bid] = name
+        for joint in scene.joint_names:     # a touched door or key counts as its object
+            self._owner[model.body(joint).id] = joint.split("/")[0]
         self._owner[model.body("table").id] = "table"
         for side, layout in scene.layout.sides.items():
             for body in layout.hand_bodies:
@@ -28,19 +31,17 @@ class SceneObserver:
 
     @cached_property
     def context(self) -> TaskContext:
-        infos = {}
-        for name, obj in self.scene.task.objects.items():
-            infos[name] = ObjectInfo(
-                name=name, half_extents=obj.half_extents,
-                interior_half_extents=None if obj.interior_half_extents is None else np.array(obj.interior_half_extents),
-                interior_offset=None if obj.interior_offset is None else np.array(obj.interior_offset))
-        points = {k: np.asarray(v, dtype=float) for k, v in self.scene.task.points.items()}
-        return TaskContext(objects=infos, zones=self.scene.task.zones, points=points,
-                           table_relative_points=frozenset(points))
+        return task_context(self.scene.task)
 
     def object_states(self, data: mujoco.MjData, names=None) -> dict[str, ObjectState]:
         out = {}
         for name in names or self.scene.object_names:
+            if name not in self.scene.object_qpos_adr:     # a fixed base: its pose in the world, at rest
+                bid = self.scene.object_body_ids[name]
+                model = self.scene.model
+                out[name] = ObjectState(pos=model.body_pos[bid].copy(), quat=model.body_quat[bid].copy(),
+                                        lin_vel=np.zeros(3), ang_vel=np.zeros(3))
+                continue
             qa, da = self.scene.object_qpos_adr[name], self.scene.object_dof_adr[name]
             # free-joint qvel is (world linear velocity, body-frame angular velocity)
             ang_local = data.qvel[da + 3: da + 6]
@@ -63,7 +64,7 @@ class SceneObserver:
         return SceneState(
             time_s=float(data.time),
             objects=self.object_states(data),
-            joints={},
+            joints={j: float(data.qpos[adr]) for j, adr in self.scene.joint_qpos_adr.items()},
             hands={side: data.site_xpos[sid].copy() for side, sid in self._wrist_sites.items()},
             table_height=self.scene.table_height,
             contacts=self.contacts(data),

@@ -1,0 +1,272 @@
+"""Object geometry as primitive parts, and the generated shapes built from them.
+
+A task object (or one link of an articulated object) is a list of parts: MuJoCo primitives placed
+in the object's frame. Physics collides the primitives; tactile ray casting uses a trimesh of the
+same parts. Generated shapes expand into primitives:
+
+    {shape: box, size: [hx, hy, hz], pos: [x, y, z], euler_deg: [rx, ry, rz], rgba: [...]}
+    {open_box: {size: [hx, hy, hz], wall: 0.01, open: +z}}      # tray, crate, cabinet (open: -y)
+    {open_cylinder: {size: [r, hz], wall: 0.006, segments: 16}}  # cup, bowl, pot, can
+Sizes are MuJoCo half sizes. Generated shapes also know their cavity (the `inside` predicate's box).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import mujoco
+import numpy as np
+import trimesh
+
+from sim.errors import SpecError
+
+GEOM_TYPES = {
+    "box": mujoco.mjtGeom.mjGEOM_BOX, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+}
+SHAPE_SIZE_LEN = {"box": 3, "cylinder": 2, "sphere": 1, "ellipsoid": 3, "capsule": 2}
+GENERATORS = ("open_box", "open_cylinder")
+OPEN_SIDES = ("+x", "-x", "+y", "-y", "+z", "-z")
+PART_KEYS = ("shape", "size", "pos", "euler_deg", "rgba")
+
+
+@dataclass(frozen=True)
+class Part:
+    shape: str
+    size: tuple[float, ...]
+    pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+    rgba: tuple[float, float, float, float] | None = None   # None: the object's colour
+
+    @property
+    def volume(self) -> float:
+        s = self.size
+        return {"box": lambda: 8 * s[0] * s[1] * s[2], "sphere": lambda: 4 / 3 * math.pi * s[0] ** 3,
+                "ellipsoid": lambda: 4 / 3 * math.pi * s[0] * s[1] * s[2],
+                "cylinder": lambda: 2 * math.pi * s[0] ** 2 * s[1],
+                "capsule": lambda: math.pi * s[0] ** 2 * (2 * s[1] + 4 / 3 * s[0])}[self.shape]()
+
+    def local_half_extents(self) -> np.ndarray:
+        s = self.size
+        return np.array({"box": (s[0], s[1], s[2]) if len(s) == 3 else (0, 0, 0), "cylinder": (s[0], s[0], s[-1]),
+                         "sphere": (s[0],) * 3, "ellipsoid": tuple(s[:3]) if len(s) == 3 else (0, 0, 0),
+                         "capsule": (s[0], s[0], s[-1] + s[0])}[self.shape], dtype=float)
+
+    def aabb(self, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+        """Axis-aligned box of the part's local box, in a frame where its parent sits at pos/quat."""
+        rot = quat_matrix(quat) @ quat_matrix(self.quat)
+        centre = np.asarray(pos, float) + quat_matrix(quat) @ np.asarray(self.pos, float)
+        half = np.abs(rot) @ self.local_half_extents()
+        return centre - half, centre + half
+
+
+@dataclass(frozen=True)
+class Cavity:
+    half_extents: tuple[float, float, float]
+    offset: tuple[float, float, float]
+
+
+def quat_matrix(quat) -> np.ndarray:
+    mat = np.zeros(9)
+    mujoco.mju_quat2Mat(mat, np.asarray(quat, dtype=float))
+    return mat.reshape(3, 3)
+
+
+def euler_quat(euler_deg) -> tuple[float, float, float, float]:
+    quat = np.zeros(4)
+    mujoco.mju_euler2Quat(quat, np.deg2rad(np.asarray(euler_deg, dtype=float)), "xyz")
+    return tuple(float(v) for v in quat)
+
+
+def pad_size(size) -> list[float]:
+    return [float(v) for v in size] + [0.0] * (3 - len(size))
+
+
+def num_list(path, field, value, length=None, positive=False) -> tuple[float, ...]:
+    ok = isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                  for v in value)
+    if not ok or (length is not None and len(value) != length):
+        raise SpecError(path, field, f"a list of {length or 'some'} numbers", value)
+    if positive and any(v <= 0 for v in value):
+        raise SpecError(path, field, "positive numbers", value)
+    return tuple(float(v) for v in value)
+
+
+# ---------------------------------------------------------------- generated shapes
+
+
+def _axis(open_side: str) -> tuple[int, float]:
+    return "xyz".index(open_side[1]), (1.0 if open_side[0] == "+" else -1.0)
+
+
+def open_box(size, wall: float, open_side: str = "+z") -> tuple[list[Part], Cavity]:
+    """A box with one open face: five slabs of thickness `wall` inside the outer half size."""
+    half = np.asarray(size, float)
+    open_axis, open_sign = _axis(open_side)
+    parts = []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            if axis == open_axis and sign == open_sign:
+                continue
+            slab = half.copy()
+            slab[axis] = wall / 2
+            pos = np.zeros(3)
+            pos[axis] = sign * (half[axis] - wall / 2)
+            # side slabs stop at the slabs across them so no two slabs overlap
+            for other in range(3):
+                if other != axis and other < axis:
+                    slab[other] = half[other] - wall
+            parts.append(Part("box", tuple(slab.round(6)), tuple(pos.round(6))))
+    cavity_half = half - wall
+    offset = np.zeros(3)
+    cavity_half[open_axis] = half[open_axis] - wall / 2
+    offset[open_axis] = open_sign * wall / 2
+    return parts, Cavity(tuple(cavity_half.round(6)), tuple(offset.round(6)))
+
+
+def open_cylinder(size, wall: float, segments: int = 16) -> tuple[list[Part], Cavity]:
+    """An open-top cylinder: a floor disc and `segments` wall slabs on a polygon round the axis."""
+    radius, half_h = float(size[0]), float(size[1])
+    parts = [Part("cylinder", (radius, wall / 2), (0.0, 0.0, -half_h + wall / 2))]
+    mid = radius - wall / 2
+    # slab half width covering the polygon edge, slightly overlapping its neighbours at the corners
+    half_w = mid * math.tan(math.pi / segments) + wall / 2
+    wall_h = half_h - wall / 2
+    for k in range(segments):
+        a = 2 * math.pi * k / segments
+        parts.append(Part("box", (wall / 2, round(half_w, 6), round(wall_h, 6)),
+                          (round(mid * math.cos(a), 6), round(mid * math.sin(a), 6), round(wall / 2, 6)),
+                          euler_quat([0, 0, math.degrees(a)])))
+    inner = (radius - wall) / math.sqrt(2)   # the square inscribed in the inner wall: never outside it
+    return parts, Cavity((round(inner, 6),) * 2 + (round(half_h - wall / 2, 6),),
+                         (0.0, 0.0, round(wall / 2, 6)))
+
+
+# ---------------------------------------------------------------- parsing
+
+
+def _transform(parts: list[Part], pos, quat) -> list[Part]:
+    rot = quat_matrix(quat)
+    out = []
+    for p in parts:
+        q = np.zeros(4)
+        mujoco.mju_mulQuat(q, np.asarray(quat, float), np.asarray(p.quat, float))
+        out.append(Part(p.shape, p.size, tuple((np.asarray(pos) + rot @ np.asarray(p.pos)).round(6).tolist()),
+                        tuple(float(v) for v in q), p.rgba))
+    return out
+
+
+def parse_part(path, field: str, raw) -> tuple[list[Part], Cavity | None]:
+    """One entry of a `parts` list: a primitive, or a generated shape (several primitives)."""
+    if not isinstance(raw, dict):
+        raise SpecError(path, field, f"a mapping: a primitive {{shape, size, ...}} or one of {list(GENERATORS)}", raw)
+    generated = [k for k in raw if k in GENERATORS]
+    pos = num_list(path, f"{field}.pos", raw.get("pos", [0, 0, 0]), 3)
+    quat = euler_quat(num_list(path, f"{field}.euler_deg", raw.get("euler_deg", [0, 0, 0]), 3))
+    rgba = num_list(path, f"{field}.rgba", raw["rgba"], 4) if "rgba" in raw else None
+    if generated:
+        (kind,) = generated
+        for key in raw:
+            if key not in (kind, "pos", "euler_deg", "rgba"):
+                raise SpecError(path, f"{field}.{key}", f"a key of a generated part: [{kind}, pos, euler_deg, rgba]")
+        args = raw[kind]
+        if not isinstance(args, dict):
+            raise SpecError(path, f"{field}.{kind}", "a mapping of shape arguments", args)
+        wall = args.get("wall")
+        if isinstance(wall, bool) or not isinstance(wall, (int, float)) or wall <= 0:
+            raise SpecError(path, f"{field}.{kind}.wall", "a positive wall thickness (m)", wall)
+        if kind == "open_box":
+            size = num_list(path, f"{field}.{kind}.size", args.get("size"), 3, positive=True)
+            side = args.get("open", "+z")
+            if side not in OPEN_SIDES:
+                raise SpecError(path, f"{field}.{kind}.open", f"one of {list(OPEN_SIDES)}", side)
+            if 2 * wall >= min(size):
+                raise SpecError(path, f"{field}.{kind}.wall", f"less than half the smallest size ({min(size)})", wall)
+            parts, cavity = open_box(size, float(wall), side)
+        else:
+            size = num_list(path, f"{field}.{kind}.size", args.get("size"), 2, positive=True)
+            segments = args.get("segments", 16)
+            if not isinstance(segments, int) or isinstance(segments, bool) or segments < 6:
+                raise SpecError(path, f"{field}.{kind}.segments", "an integer >= 6", segments)
+            if 2 * wall >= min(size):
+                raise SpecError(path, f"{field}.{kind}.wall", f"less than half the smallest size ({min(size)})", wall)
+            parts, cavity = open_cylinder(size, float(wall), segments)
+        parts = [Part(p.shape, p.size, p.pos, p.quat, rgba) for p in _transform(parts, pos, quat)]
+        if quat != (1.0, 0.0, 0.0, 0.0):
+            cavity = None    # a turned cavity is not axis-aligned with the object: declare it
+        else:
+            cavity = Cavity(cavity.half_extents, tuple(float(a + b) for a, b in zip(cavity.offset, pos)))
+        return parts, cavity
+    for key in raw:
+        if key not in PART_KEYS:
+            raise SpecError(path, f"{field}.{key}",
+                            f"a part key {list(PART_KEYS)} or a generated shape {list(GENERATORS)}")
+    shape = raw.get("shape")
+    if shape not in SHAPE_SIZE_LEN:
+        raise SpecError(path, f"{field}.shape", f"one of {sorted(SHAPE_SIZE_LEN)} (or a generated shape "
+                        f"{list(GENERATORS)})", shape)
+    size = num_list(path, f"{field}.size", raw.get("size"), SHAPE_SIZE_LEN[shape], positive=True)
+    return [Part(shape, size, pos, quat, rgba)], None
+
+
+def parse_parts(path, field: str, raw) -> tuple[tuple[Part, ...], Cavity | None]:
+    """A `parts` list; the cavity is that of its single generated shape, if it has exactly one."""
+    if not isinstance(raw, list) or not raw:
+        raise SpecError(path, field, "a non-empty list of parts", raw)
+    parts, cavities = [], []
+    for i, item in enumerate(raw):
+        p, cavity = parse_part(path, f"{field}[{i}]", item)
+        parts += p
+        if cavity is not None:
+            cavities.append(cavity)
+    return tuple(parts), (cavities[0] if len(cavities) == 1 else None)
+
+
+# ---------------------------------------------------------------- bounds, masses, meshes
+
+
+def parts_aabb(parts, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    boxes = [p.aabb(pos, quat) for p in parts]
+    return np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0)
+
+
+def part_masses(parts, total_mass: float) -> list[float]:
+    """The object's mass shared over its parts by volume (uniform density)."""
+    volumes = np.array([p.volume for p in parts])
+    return (total_mass * volumes / volumes.sum()).tolist()
+
+
+def primitive_mesh(shape: str, size) -> trimesh.Trimesh:
+    """A watertight mesh of a primitive in its own frame (MuJoCo conventions: cylinders and
+    capsules along z, sizes are half-lengths), fine enough that faceting stays well below the
+    tactile depth resolution."""
+    if shape == "box":
+        return trimesh.creation.box(extents=2 * np.asarray(size[:3]))
+    if shape == "sphere":
+        return trimesh.creation.icosphere(subdivisions=4, radius=size[0])
+    if shape == "ellipsoid":
+        mesh = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
+        mesh.apply_scale(np.asarray(size[:3]))
+        return mesh
+    if shape == "cylinder":
+        return trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=96)
+    if shape == "capsule":
+        return trimesh.creation.capsule(radius=size[0], height=2 * size[1], count=[48, 48])
+    raise ValueError(f"no mesh for shape '{shape}'; valid shapes: {sorted(SHAPE_SIZE_LEN)}")
+
+
+@lru_cache(maxsize=512)
+def parts_mesh(parts: tuple[Part, ...]) -> trimesh.Trimesh:
+    """One mesh of all parts in their common frame (for the tactile sensor's ray casting)."""
+    meshes = []
+    for p in parts:
+        mesh = primitive_mesh(p.shape, p.size)
+        tf = np.eye(4)
+        tf[:3, :3] = quat_matrix(p.quat)
+        tf[:3, 3] = p.pos
+        mesh.apply_transform(tf)
+        meshes.append(mesh)
+    return meshes[0] if len(meshes) == 1 else trimesh.util.concatenate(meshes)

@@ -1,0 +1,103 @@
+"""The 26 paper tasks: each builds on its paper embodiment and on another, settles for 1 s without
+anything falling through, and each stage predicate holds in a placed state and fails in another."""
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from stage_states import stage_value
+from task_scenes import settle
+
+from sim.embodiment import embodiment_names
+from sim.registry import names, paper_settings
+from sim.scene.builder import build_scene
+from sim.scene.meshes import tactile_targets
+from sim.scene.parts import parts_aabb
+from sim.scene.sample import demonstration_sample
+from sim.tasks import load_task
+
+STATES = yaml.safe_load((Path(__file__).parent / "task_stage_states.yaml").read_text())
+PENETRATION_TOLERANCE_M = 0.003   # deepest contact of an object with the table or another object
+DROP_TOLERANCE_M = 0.01      # any object's fall while settling
+DRIFT_TOLERANCE_M = 0.03     # any object's slide while settling
+
+
+def _other_embodiment(task: str) -> str:
+    """A second embodiment per task, spread over the catalog (never the paper one)."""
+    embodiments = embodiment_names()
+    paper = load_task(task).paper_embodiment
+    k = (names("tasks").index(task) + 1) % len(embodiments)
+    return embodiments[k] if embodiments[k] != paper else embodiments[(k + 1) % len(embodiments)]
+
+
+PAIRS = ([(t, load_task(t).paper_embodiment) for t in names("tasks")]
+         + [(t, _other_embodiment(t)) for t in names("tasks")])
+
+
+def test_the_catalog_is_the_papers_26_tasks_on_their_embodiments():
+    settings = {s.task: s for s in paper_settings()}
+    assert sorted(settings) == names("tasks") and len(settings) == 26
+    for task, setting in settings.items():
+        assert load_task(task).paper_embodiment == setting.embodiment
+        assert setting.available, setting.key
+        assert load_task(task).metrics.get("expert_horizon_steps"), task
+
+
+def test_only_tasks_with_a_demo_plan_are_recordable():
+    recordable = [s.task for s in paper_settings() if s.recordable]
+    assert recordable == [t for t in names("tasks") if load_task(t).demo_plan]
+    assert "citrus_plate_loading" in recordable
+
+
+@pytest.mark.parametrize("task,embodiment", PAIRS, ids=[f"{t}-{e}" for t, e in PAIRS])
+def test_task_builds_and_settles(task, embodiment):
+    s = settle(task, embodiment)
+    assert np.isfinite(s.data.qpos).all() and np.isfinite(s.data.qvel).all()
+    for name in s.scene.object_names:
+        moved = s.end[name].pos - s.start[name].pos
+        assert moved[2] > -DROP_TOLERANCE_M, (name, moved)
+        assert np.linalg.norm(moved[:2]) < DRIFT_TOLERANCE_M, (name, moved)
+    objects_and_table = set(s.scene.object_names) | {"table"}
+    for obj, other, dist in s.object_contacts():
+        assert other in objects_and_table, f"{obj} touches {other}: the robot's home pose reaches into it"
+        assert dist > -PENETRATION_TOLERANCE_M, (obj, other, dist)
+    model = s.scene.model
+    for joint, q in s.joints.items():
+        lo, hi = model.jnt_range[model.joint(joint).id]
+        assert lo - 1e-3 <= q <= hi + 1e-3, (joint, q)
+        assert q == pytest.approx(s.scene.joint_initial[joint], abs=2e-3), (joint, q)   # nothing sags
+
+
+@lru_cache(maxsize=4)
+def _scene(task: str):
+    spec = load_task(task)
+    return build_scene(spec, spec.paper_embodiment, demonstration_sample(spec, 0))
+
+
+@pytest.mark.parametrize("task", names("tasks"))
+def test_stage_predicates_hold_and_fail_in_placed_states(task):
+    scene = _scene(task)
+    stages = scene.task.metrics.get("stages", [])
+    assert sorted(STATES[task]) == sorted(s["id"] for s in stages)
+    for stage in stages:
+        states = STATES[task][stage["id"]]
+        assert stage_value(scene, stage, states["sat"]), f"{stage['id']}: satisfying state does not hold"
+        assert not stage_value(scene, stage, states["viol"]), f"{stage['id']}: violating state holds"
+
+
+@pytest.mark.parametrize("task", names("tasks"))
+def test_every_object_and_link_has_a_tactile_mesh(task):
+    scene = _scene(task)
+    targets = {t.name: t for t in tactile_targets(scene)}
+    expected = set(scene.object_names) | set(scene.joint_names) | set(scene.distractor_names)
+    assert set(targets) == expected
+    for name, obj in scene.task.objects.items():
+        lo, hi = parts_aabb(obj.parts)
+        assert np.allclose(targets[name].mesh.bounds, [lo, hi], atol=2e-3), name
+        assert scene.model.body(targets[name].body).id > 0
+        for link in obj.links:
+            mesh = targets[f"{name}/{link.name}"].mesh
+            lo, hi = parts_aabb(link.parts)
+            assert np.allclose(mesh.bounds, [lo, hi], atol=2e-3), link.name
