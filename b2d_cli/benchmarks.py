@@ -1,10 +1,13 @@
-"""Benchmarks that print figures (`b2d bench recorder|replay`), with baselines from the same run."""
+"""Benchmarks that print figures (`b2d bench recorder|replay|tactile-replay`), with baselines from the
+same run."""
 
 from __future__ import annotations
 
 import tempfile
 import time
 from pathlib import Path
+
+import numpy as np
 
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
 from sim import physics
@@ -18,6 +21,7 @@ from teleop.recorder import home, new_buffer, record_step
 from teleop.scripted_operator import ScriptedOperator
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
+TACTILE_BENCH_MIN_STEPS = 480  # long enough for the scripted operator's first grasp
 
 
 def _scene():
@@ -73,9 +77,85 @@ def bench_replay(profile_name: str, steps: int) -> dict:
             "bytes_per_frame_on_disk": out["bytes"] / max(frames, 1), "seconds": total}
 
 
+def _mean_ms(seconds: list[float]) -> float:
+    return round(1e3 * float(np.mean(seconds)), 3) if seconds else 0.0
+
+
+def bench_tactile_replay(profile_name: str, steps: int) -> dict:
+    """Added cost of tactile per rendered frame, against the cameras of the same frames (same run).
+
+    Per frame: pose the replayed state, render every camera of the profile, then sense every
+    tactile site and append its datasets to an HDF5 file (what `render_to_file` adds per frame).
+    """
+    import cv2
+    import mujoco
+
+    from episodes.raw import read_raw
+    from episodes.stages import frame_steps
+    from episodes.tactile_frames import TactileFrames, frame_datasets
+    from episodes.writer import EpisodeWriter
+    from sim.render import CameraRig, set_positions
+    from sim.replay import replay, scene_for
+
+    profile = sensor_profile(profile_name)
+    if not profile.tactile_enabled:
+        raise ValueError(f"sensor profile '{profile_name}' disables tactile: nothing to measure")
+    steps = max(steps, TACTILE_BENCH_MIN_STEPS)
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        raw = read_raw(record_demonstrations(TASK, EMBODIMENT, 1, tmp, max_steps=steps)[0].path)
+        qpos = replay(raw).qpos
+        scene = scene_for(raw)
+        data = mujoco.MjData(scene.model)
+        cameras = CameraRig(scene.model, profile)
+        t0 = time.perf_counter()
+        touch = TactileFrames(scene, profile)
+        build_s = time.perf_counter() - t0
+        camera_s, sense_s, write_s, contact, rays = [], [], [], [], []
+        with EpisodeWriter(tmp / "tactile.h5", touch.static()) as writer:
+            for step in frame_steps(len(qpos), profile.rate_hz):
+                set_positions(scene.model, data, qpos[step])
+                t0 = time.perf_counter()
+                cameras.capture(data)
+                t1 = time.perf_counter()
+                frame = touch.rig.capture(data)
+                t2 = time.perf_counter()
+                writer.append(frame_datasets(frame))
+                t3 = time.perf_counter()
+                camera_s.append(t1 - t0)
+                sense_s.append(t2 - t1)
+                write_s.append(t3 - t2)
+                contact.append(bool(frame.mask.any()))
+                rays.append(frame.rays_cast)
+        cameras.close()
+        tactile_bytes = (tmp / "tactile.h5").stat().st_size
+    tactile_s = np.add(sense_s, write_s)
+    hit = np.array(contact)
+    return {
+        "profile": profile_name, "control_steps": steps, "frames": len(camera_s), "contact_frames": int(hit.sum()),
+        "cameras": len(profile.camera_ids), "camera_resolution": [profile.width, profile.height],
+        "tactile_sites": len(touch.rig.site_names), "tactile_shape": list(touch.rig.shape),
+        "camera_ms_per_frame": _mean_ms(camera_s),
+        "tactile_ms_per_frame": _mean_ms(list(tactile_s)),
+        "tactile_sense_ms_per_frame": _mean_ms(sense_s), "tactile_write_ms_per_frame": _mean_ms(write_s),
+        "tactile_ms_contact_frames": _mean_ms(list(tactile_s[hit])),
+        "tactile_ms_no_contact_frames": _mean_ms(list(tactile_s[~hit])),
+        "tactile_vs_camera_ratio": round(float(np.sum(tactile_s) / np.sum(camera_s)), 4),
+        "rays_cast_per_frame": round(float(np.mean(rays)), 1),
+        "rig_build_s": round(build_s, 3),
+        "tactile_bytes_per_frame_on_disk": round(tactile_bytes / max(len(camera_s), 1)),
+        "opencv_threads": cv2.getNumThreads(),
+        "note": (f"scripted {TASK} on {EMBODIMENT}; --steps below {TACTILE_BENCH_MIN_STEPS} are raised to it so "
+                 "the first grasp is in the window; camera = render of all cameras, tactile = sensing all sites + "
+                 "HDF5 append; rig_build_s = surface maps + target BVHs, once per file"),
+    }
+
+
 def run(part: str, profile: str = "preview", steps: int = 120) -> dict:
     if part == "recorder":
         return bench_recorder(steps)
     if part == "replay":
         return bench_replay(profile, steps)
+    if part == "tactile-replay":
+        return bench_tactile_replay(profile, steps)
     raise ValueError(part)

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import click
 
+from b2d_cli.tactile_cmd import tactile
+from b2d_cli.tasks_cmd import tasks
 from sim import registry
 from sim.errors import SpecError, UnknownNameError
 
@@ -159,8 +161,8 @@ def validate(episode) -> None:
 
 
 @cli.command()
-@click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "embodiments"]))
-@click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay).")
+@click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "tactile-replay", "embodiments"]))
+@click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay, tactile-replay).")
 @click.option("--steps", default=120, show_default=True, help="Control steps to record (recorder, replay).")
 def bench(part, profile, steps) -> None:
     """Print benchmark figures as JSON on stdout."""
@@ -211,6 +213,10 @@ def materialize(settings_, profile, episodes, eval_episodes, max_steps) -> None:
         cols = ["task", "embodiment", "policy", "channel", "N", "SR", "LSCR"]
         click.echo(pd.read_parquet(table)[cols].to_string(index=False))
     sys.exit(0 if all(r.success for r in results) else 1)
+
+
+cli.add_command(tactile)
+cli.add_command(tasks)
 
 
 if __name__ == "__main__":

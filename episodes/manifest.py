@@ -17,7 +17,8 @@ def write_manifest(directory: str | Path) -> Path:
         with EpisodeReader(path) as r:
             entries.append({"file": path.name, "task": r.meta("task"), "embodiment": r.meta("embodiment"),
                             "frames": r.num_frames, "success": bool(r.meta("success")),
-                            "cameras": r.camera_ids, "sha256": file_sha256(path), "bytes": path.stat().st_size})
+                            "cameras": r.camera_ids, "tactile_sites": r.tactile_sites,
+                            "sha256": file_sha256(path), "bytes": path.stat().st_size})
     out = directory / schema.MANIFEST_NAME
     write_text_atomic(out, json.dumps({"schema_version": schema.SCHEMA_VERSION, "episodes": entries}, indent=2))
     return out

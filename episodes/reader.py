@@ -45,6 +45,15 @@ class EpisodeReader:
     def object_ids(self) -> list[str]:
         return sorted(self._file["objects"].keys()) if "objects" in self._file else []
 
+    def __contains__(self, dataset: str) -> bool:
+        return dataset in self._file
+
+    @property
+    def tactile_sites(self) -> list[str]:
+        """Tactile site names in stored order (empty when the episode has no tactile)."""
+        path = "robot/tactile/site_names"
+        return self.static(path) if path in self._file else []
+
     def read(self, dataset: str, start: int = 0, stop: int | None = None) -> np.ndarray:
         """Frames [start, stop) of one per-frame dataset, e.g. "cameras/chest/rgb"; only the
         chunks covering the range are read and decompressed."""

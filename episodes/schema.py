@@ -2,7 +2,7 @@
 
 Writers and the validator both read these declarations; a reader never needs to know how a file
 was written. Shapes use symbols: T frames, J robot joints, A actions, H/W camera pixels,
-Ht/Wt tactile pixels. `None` in a shape means "any".
+S tactile sites, Ht/Wt tactile pixels. `None` in a shape means "any".
 """
 
 from __future__ import annotations
@@ -66,6 +66,29 @@ OBJECT_NODES = (
     Node("lin_vel_world", "dataset", "float64", ("T", 3), modality="object_state"),
     Node("ang_vel_world", "dataset", "float64", ("T", 3), modality="object_state"),
 )
+
+# Tactile (paper: robot/tactile/meta, tacmap/{site}, distance_along_normal_m/{site}, contact_mask/{site}),
+# required when meta/modalities lists "tactile" or the collection profile enables it. S sites;
+# surface/{site} holds each site's point (mm) and inward-normal maps on the stored grid.
+TACTILE_ROOT = "robot/tactile"
+TACTILE_NODES = (
+    Node("robot/tactile/meta", "dataset", "str", (), modality="tactile"),
+    Node("robot/tactile/site_names", "dataset", "str", ("S",), modality="tactile"),
+)
+TACTILE_SITE_NODES = (
+    Node("robot/tactile/tacmap/{site}", "dataset", "uint8", ("T", "Ht", "Wt"), modality="tactile"),
+    Node("robot/tactile/distance_along_normal_m/{site}", "dataset", "float32", ("T", "Ht", "Wt"), modality="tactile"),
+    Node("robot/tactile/contact_mask/{site}", "dataset", "bool", ("T", "Ht", "Wt"), modality="tactile"),
+    Node("robot/tactile/surface/{site}/point_mm", "dataset", "float32", ("Ht", "Wt", 3), modality="tactile"),
+    Node("robot/tactile/surface/{site}/normal", "dataset", "float32", ("Ht", "Wt", 3), modality="tactile"),
+)
+TACTILE_PER_FRAME = ("tacmap", "distance_along_normal_m", "contact_mask")
+
+
+def tactile_path(kind: str, site: str) -> str:
+    """Per-site tactile dataset, e.g. tactile_path("tacmap", "right_index_tip")."""
+    return f"{TACTILE_ROOT}/{kind}/{site}"
+
 
 DEPTH_SEMANTICS = ("metric z-depth in metres along the camera optical axis (OpenCV camera frame: "
                    "x right, y down, z forward); the far clip value where nothing is hit")

@@ -18,8 +18,10 @@ import numpy as np
 from episodes import schema
 from episodes.atomic import atomic_path, file_sha256
 from episodes.raw import read_raw
+from episodes.tactile_frames import TactileFrames
 from episodes.writer import EpisodeWriter
 from sim import physics
+from sim.errors import SpecError
 from sim.registry import SensorProfile
 from sim.render import CameraRig, set_positions
 from sim.replay import replay, scene_for
@@ -81,6 +83,9 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
         static[f"cameras/{cam}/depth_semantics"] = schema.DEPTH_SEMANTICS
         static[f"cameras/{cam}/clip_range_m"] = np.array([profile.clip_near_m, profile.clip_far_m])
     static["render/frame_steps"] = steps
+    tactile = TactileFrames(scene, profile) if profile.tactile_enabled else None
+    if tactile is not None:   # tactile comes from the same posed state as the images (paper: same pass)
+        static.update(tactile.static())
     errors = 0
     with EpisodeWriter(out_path, static) as writer:
         writer.file.attrs.update({"schema": RENDER_SCHEMA, "profile": profile.name,
@@ -91,12 +96,16 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
             try:
                 shots = rig.capture(data)
             except Exception as exc:   # keep the episode: flag the frame instead of aborting
-                errors += 1
                 error, shots = f"render failed: {exc}", _blank_shots(profile)
             for cam, T in rig.extrinsics(data).items():
                 frame[f"cameras/{cam}/extrinsic_world_from_cam"] = T
                 for key, img in shots[cam].items():
                     frame[f"cameras/{cam}/{key}"] = img
+            if tactile is not None:
+                touch, touch_error = tactile.capture(data)
+                frame.update(touch)
+                error = "; ".join(e for e in (error, touch_error) if e)
+            errors += bool(error)
             frame["render/frame_errors"] = error
             writer.append(frame)
     rig.close()
@@ -138,7 +147,11 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
         success_step = metrics.get("steps_to_stable")   # 1-based count of updates
         drift = rep["drift_flags"][()]
         T = len(steps)
-        modalities = ["rgb", "depth", "robot_state", "object_state"]
+        has_tactile = schema.TACTILE_ROOT in ren
+        if profile.tactile_enabled and not has_tactile:
+            raise SpecError(render_path, schema.TACTILE_ROOT,
+                            f"tactile frames (profile '{profile.name}' enables tactile; re-render)")
+        modalities = ["rgb", "depth", "robot_state", "object_state"] + (["tactile"] if has_tactile else [])
         static = {
             "meta/task": task.name, "meta/embodiment": attrs["embodiment"], "meta/instruction": task.instruction,
             "meta/scene": attrs["scene_sample"], "meta/modalities": json.dumps(modalities),
@@ -180,6 +193,8 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
                 writer.append(frame)
             for cam in profile.camera_ids:
                 writer.file.copy(ren[f"cameras/{cam}"], f"cameras/{cam}")
+            if has_tactile:
+                writer.file.copy(ren[schema.TACTILE_ROOT], schema.TACTILE_ROOT)
             for key, ds in rep["traces"].items():
                 writer.file.copy(ds, f"metrics/timeseries/{key}")
             writer.file.create_dataset("metrics/timeseries/sim_step", data=np.arange(1, rep["action"].shape[0] + 1))

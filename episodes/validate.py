@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -71,6 +72,7 @@ def validate_episode(path: str | Path) -> list[str]:
                 if node.modality in ("rgb", "depth") and node.modality not in modalities:
                     continue
                 _check_node(f, f"cameras/{cam}/", node, cam_dims, problems)
+        _check_tactile(f, dims, modalities, problems)
         for obj in (list(f["objects"].keys()) if "objects" in f else []):
             for node in schema.OBJECT_NODES:
                 _check_node(f, f"objects/{obj}/", node, dict(dims), problems)
@@ -93,3 +95,55 @@ def _modalities(f: h5py.File, problems: list[str]) -> list[str]:
     except (ValueError, TypeError):
         problems.append("meta/modalities: expected a JSON list")
         return []
+
+
+def _check_tactile(f: h5py.File, dims: dict, modalities: list[str], problems: list[str]) -> None:
+    """robot/tactile/: required when listed in meta/modalities or enabled by the collection profile."""
+    root = schema.TACTILE_ROOT
+    listed, enabled = "tactile" in modalities, _profile_enables_tactile(f)
+    if root not in f:
+        if listed or enabled:
+            why = "meta/modalities lists tactile" if listed else "meta/collection_config's profile enables tactile"
+            problems.append(f"{root}/: missing although {why}")
+        return
+    if not listed:
+        problems.append(f"meta/modalities: expected 'tactile' in the list, since {root}/ is present")
+    tactile_dims = dict(dims)
+    for node in schema.TACTILE_NODES:
+        _check_node(f, "", node, tactile_dims, problems)
+    sites = _tactile_sites(f, problems)
+    for site in sites:
+        for node in schema.TACTILE_SITE_NODES:
+            _check_node(f, "", dataclasses.replace(node, path=node.path.format(site=site)), tactile_dims, problems)
+    for kind in schema.TACTILE_PER_FRAME:
+        group = f.get(f"{root}/{kind}")
+        extra = sorted(set(group) - set(sites)) if isinstance(group, h5py.Group) else []
+        if extra:
+            problems.append(f"{root}/{kind}: sites {extra} are not listed in {root}/site_names")
+    try:
+        shape = json.loads(f[f"{root}/meta"][()]).get("shape")
+    except (KeyError, ValueError, TypeError, AttributeError):
+        problems.append(f"{root}/meta: expected a JSON object with the tactile settings")
+        return
+    stored = [tactile_dims.get("Ht"), tactile_dims.get("Wt")]
+    if None not in stored and shape != stored:
+        problems.append(f"{root}/meta: shape {shape}, expected the stored tactile grid {stored}")
+
+
+def _tactile_sites(f: h5py.File, problems: list[str]) -> list[str]:
+    path = f"{schema.TACTILE_ROOT}/site_names"
+    if path not in f or not isinstance(f[path], h5py.Dataset) or f[path].ndim != 1:
+        return []
+    sites = [v.decode() if isinstance(v, bytes) else str(v) for v in f[path][()]]
+    if not sites or len(set(sites)) != len(sites) or any(not s or "/" in s for s in sites):
+        problems.append(f"{path}: expected unique, non-empty site names without '/', got {sites}")
+        return []
+    return sites
+
+
+def _profile_enables_tactile(f: h5py.File) -> bool:
+    try:
+        config = json.loads(f["meta/collection_config"][()])
+        return bool(config["profile"]["tactile"]["enabled"])
+    except (KeyError, ValueError, TypeError):
+        return False

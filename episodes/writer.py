@@ -31,6 +31,9 @@ class EpisodeWriter:
         self._atomic = atomic_path(self.path)
         self._file: h5py.File | None = None
         self._count = 0
+        # open handles, kept for the whole episode: dropping one flushes its chunk cache, which
+        # recompresses a partly filled 256-frame chunk on every append (~4 ms per small dataset)
+        self._datasets: dict[str, h5py.Dataset] = {}
 
     def __enter__(self) -> "EpisodeWriter":
         tmp = self._atomic.__enter__()
@@ -48,7 +51,10 @@ class EpisodeWriter:
         elif isinstance(value, dict):
             self._file.create_dataset(key, data=json.dumps(value, sort_keys=True), dtype=STR)
         else:
-            self._file.create_dataset(key, data=np.asarray(value))
+            value = np.asarray(value)
+            # large static arrays (tactile surface maps) compress like per-frame data; scalars cannot
+            packed = {"compression": "gzip", "compression_opts": 4, "shuffle": True} if value.size >= 1024 else {}
+            self._file.create_dataset(key, data=value, **packed)
 
     def append(self, frame: dict) -> None:
         for key, value in frame.items():
@@ -56,26 +62,27 @@ class EpisodeWriter:
                 self._append_str(key, value)
                 continue
             value = np.asarray(value)
-            if key not in self._file:
-                self._create(key, value)
-            ds = self._file[key]
+            ds = self._datasets.get(key)
+            if ds is None:
+                ds = self._datasets[key] = self._create(key, value)
             ds.resize(self._count + 1, axis=0)
             ds[self._count] = value
         self._count += 1
 
-    def _create(self, key: str, value: np.ndarray) -> None:
+    def _create(self, key: str, value: np.ndarray) -> h5py.Dataset:
         image_like = value.ndim >= 2 and value.size >= 1024
         kwargs = {"compression": "lzf"} if image_like else {"compression": "gzip", "compression_opts": 4}
         if value.dtype.kind == "f" and not image_like:
             kwargs["shuffle"] = True
-        self._file.create_dataset(key, shape=(0, *value.shape), maxshape=(None, *value.shape),
-                                  dtype=value.dtype, chunks=(schema.IMAGE_CHUNK_FRAMES if image_like else 256,
-                                                             *value.shape), **kwargs)
+        frames = schema.IMAGE_CHUNK_FRAMES if image_like else 256
+        return self._file.create_dataset(key, shape=(0, *value.shape), maxshape=(None, *value.shape),
+                                         dtype=value.dtype, chunks=(frames, *value.shape), **kwargs)
 
     def _append_str(self, key: str, value: str) -> None:
-        if key not in self._file:
-            self._file.create_dataset(key, shape=(0,), maxshape=(None,), dtype=STR, chunks=(256,))
-        ds = self._file[key]
+        ds = self._datasets.get(key)
+        if ds is None:
+            ds = self._datasets[key] = self._file.create_dataset(key, shape=(0,), maxshape=(None,), dtype=STR,
+                                                                 chunks=(256,))
         ds.resize(self._count + 1, axis=0)
         ds[self._count] = value
 
@@ -85,6 +92,7 @@ class EpisodeWriter:
 
     def write_final(self, key: str, value) -> None:
         """Datasets known only at the end (episode metrics, success flags)."""
+        self._datasets.pop(key, None)
         if key in self._file:
             del self._file[key]
         self._write_static(key, value)
@@ -94,5 +102,6 @@ class EpisodeWriter:
         return self._count
 
     def __exit__(self, exc_type, exc, tb) -> None:
+        self._datasets.clear()
         self._file.close()
         self._atomic.__exit__(exc_type, exc, tb)

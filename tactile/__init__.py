@@ -3,7 +3,9 @@
 Modules: ``pads`` (pad meshes from hand files), ``registry`` (a hand's tactile block),
 ``surface`` (surface maps and their .npy assets), ``raycast`` / ``broadphase`` / ``sensor``
 (per-frame sensing), ``quantize`` (the paper's depth encoding), ``heatmap`` (figures) and
-``bench`` (throughput). Nothing here imports Dagster.
+``bench`` (throughput); ``targets`` (scene geoms as ray-cast targets) and ``rig`` (a compiled
+scene's sites and targets, sensed per frame) bind it to b2d's MuJoCo scenes. Nothing here imports
+Dagster.
 """
 
 from tactile.pads import PadSpec, build_pad_mesh, parse_pad

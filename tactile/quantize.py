@@ -60,3 +60,18 @@ def smooth_tacmap(quantized: np.ndarray, step: int) -> np.ndarray:
 def encode_tacmap(distance_m: np.ndarray, mask: np.ndarray, step: int) -> np.ndarray:
     """Metric depth (metres, H x W) and contact-validity mask -> stored 8-bit tacmap (H x W)."""
     return smooth_tacmap(quantize_depth(distance_m, mask), step)
+
+
+def encoding_description(step: int) -> dict:
+    """The tacmap encoding at ``step`` as JSON-able settings (stored with every tactile episode)."""
+    return {
+        "input": "distance_along_normal_m (metres, zero where contact_mask is false)",
+        "fine_limit_mm": FINE_LIMIT_MM,
+        "fine_mm_per_level": FINE_MM_PER_LEVEL,
+        "coarse_mm_per_level": COARSE_MM_PER_LEVEL,
+        "coarse_offset": COARSE_OFFSET,
+        "saturation_mm": FINE_LIMIT_MM + (255 - COARSE_OFFSET) * COARSE_MM_PER_LEVEL,
+        "cast": "uint8(clip(q, 0, 255)), truncating",
+        "smoothing": {"type": "gaussian", "sigma": SMOOTHING_SIGMA, "kernel": smoothing_kernel_size(step),
+                      "border": "reflect_101", "evaluated_in": "float32", "output": "rint -> uint8"},
+    }

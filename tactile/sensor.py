@@ -118,11 +118,12 @@ class TactileSensor:
         by_coordinate = [np.ascontiguousarray(a.T, dtype=np.float32) for a in (points, normals)]
         return _SiteRays(cells, points, normals, box, *by_coordinate)
 
-    def add_target(self, name: str, mesh_local: trimesh.Trimesh) -> None:
-        """Register a target mesh (task object or link) in its own local frame; builds its BVH once."""
+    def add_target(self, name: str, mesh_local: trimesh.Trimesh | MeshRaycaster) -> None:
+        """Register a target (task object or link) in its own local frame: a mesh, whose BVH is built
+        here once, or a ``MeshRaycaster`` already built (and possibly shared: it is read-only)."""
         if name in self._targets:
             raise ValueError(f"target '{name}' is already registered")
-        caster = MeshRaycaster(mesh_local)
+        caster = mesh_local if isinstance(mesh_local, MeshRaycaster) else MeshRaycaster(mesh_local)
         self._targets[name] = _Target(caster, LocalBox.around(caster.bounds))
 
     @property

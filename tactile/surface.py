@@ -107,6 +107,17 @@ def surface_map_from_pad(pad: PadSpec, resolution: int = NATIVE_RESOLUTION, grou
     return surface_map_from_mesh(build_pad_mesh(pad), pad.center, pad.frame(), side, resolution, group)
 
 
+def mirror_surface_map(surface: SurfaceMap) -> SurfaceMap:
+    """The surface reflected through the attach-body yz plane (x negated in points and normals).
+
+    A left hand is the right one mirrored by ``diag(-1, 1, 1)`` (``sim.embodiment.mirror``); its
+    maps keep the right hand's grid, so one pixel is the same spot of the finger on both sides.
+    """
+    flip = np.array([-1.0, 1.0, 1.0], dtype=np.float32)
+    # + 0 turns the -0.0 of empty cells back into 0.0: mirrored maps stay byte-stable
+    return SurfaceMap(surface.group, surface.point_mm * flip + 0, surface.normal * flip + 0)
+
+
 def surface_map_paths(directory, group: str) -> tuple[Path, Path]:
     directory = Path(directory)
     return directory / f"{group}_point.npy", directory / f"{group}_normal.npy"

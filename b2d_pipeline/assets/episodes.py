@@ -16,8 +16,9 @@ def build(settings: FactorySettings):
     profile = settings.profile
 
     @dg.asset(partitions_def=settings_partitions, group_name="episodes", deps=["replays", "renders"],
-              code_version=f"1-{profile.content_hash}",
-              description="Synchronized multimodal episodes (meta, time, action, cameras, robot, objects, metrics).")
+              code_version=f"2-{profile.content_hash}",   # 2: robot/tactile copied from the renders
+              description="Synchronized multimodal episodes (meta, time, action, cameras, robot incl. tactile, "
+                          "objects, metrics).")
     def episodes(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key
         out_dir = store.episode_dir(profile.content_hash, key)

@@ -1,4 +1,4 @@
-"""RGB-D renders of each replay under the active sensor profile."""
+"""RGB-D and tactile renders of each replay under the active sensor profile."""
 
 
 import dagster as dg
@@ -14,9 +14,11 @@ def build(settings: FactorySettings):
     profile = settings.profile
 
     # The profile hash in the code version: a changed profile marks renders (and downstream) stale.
+    # 2: renders carry the tactile frames (robot/tactile) when the profile enables them.
     @dg.asset(partitions_def=settings_partitions, group_name="renders", deps=["replays"],
-              code_version=f"1-{profile.content_hash}",
-              description=f"Camera renders under the '{profile.name}' sensor profile ({profile.content_hash}).")
+              code_version=f"2-{profile.content_hash}",
+              description=f"Camera and tactile renders under the '{profile.name}' sensor profile "
+                          f"({profile.content_hash}).")
     def renders(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key
         paths, errors, frames = [], {}, 0
@@ -33,6 +35,7 @@ def build(settings: FactorySettings):
         described = store.describe(paths)
         return dg.MaterializeResult(
             metadata={"profile": profile.name, "profile_hash": profile.content_hash, "frames": frames,
+                      "tactile": profile.tactile_enabled,
                       "files": dg.MetadataValue.json(described)},
             data_version=data_version(described, profile.content_hash))
 
