@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from episodes.raw import write_raw
+from sim.errors import SpecError
 from sim.registry import names, validate_name
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, task_seed
@@ -36,6 +37,9 @@ def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Pa
     validate_name("task", task)
     validate_name("embodiment", embodiment)
     spec = load_task(task)
+    if not spec.demo_plan:     # fail once, before any scene is built, rather than record idle episodes
+        raise SpecError(spec.source, "demo_plan", "a pick-and-place plan for the scripted operator",
+                        "none: this task has no scripted demonstration yet")
     task_index = names("tasks").index(task)
     results = []
     for i in range(first_index, first_index + episodes):

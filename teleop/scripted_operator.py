@@ -7,7 +7,7 @@ same plan drives any embodiment: nothing here depends on a particular arm or han
 
 Where the object sits in the hand and how the hand closes come from the hand file: its
 `tabletop_grasp` (object centre in the wrist-site frame, closing targets, which actuators close
-late and which stay closed on release), else its `grasp_probe` power grasp. Like a person, the
+late), else its `grasp_probe` power grasp. Like a person, the
 operator looks once more where the object sits in the hand when it is above the target, and
 corrects the lowering for a slipped grasp.
 """
@@ -29,14 +29,14 @@ PALM_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
 # Segment durations in control steps (60 Hz).
 DURATIONS = {"approach": 60, "descend": 40, "close": 20, "close_late": 20, "hold": 10, "lift": 40,
              "carry": 60, "lower": 40, "open": 20, "retreat": 30}
-# Hand closure per actuator group (early, late, held), each 0 = open .. 1 = grasp target. Closing:
-# the early actuators (fingers) form a wall, then the late ones (thumb) press the object against
-# it. Releasing: all open except the held ones (thumb opposition), which open once the hand is
-# clear, so the thumb neither hooks the object nor swings into fruit already placed.
-OPEN, WALL, CLOSED, RELEASED = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 1.0), (0.0, 0.0, 1.0)
+# Hand closure per actuator group (early, late), each 0 = open .. 1 = grasp target. Closing: the
+# early actuators (fingers) form a wall, then the late ones (thumb) press the object against it.
+# Releasing opens both together: a thumb kept in opposition hooks the fruit as the hand lifts and
+# flicks it off the plate.
+OPEN, WALL, CLOSED = (0.0, 0.0), (1.0, 0.0), (1.0, 1.0)
 APPROACH_HEIGHT_M = 0.12
 LIFT_HEIGHT_M = 0.14
-RELEASE_GAP_M = 0.03          # fruit is let go just above the plate, so the opening fingers clear it
+RELEASE_GAP_M = 0.005         # lowered to just above the plate: fruit let go higher bounces and rolls
 PALM_CLEARANCE_M = 0.004
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
@@ -51,9 +51,9 @@ def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
     elif hand.grasp_probe is not None:
         site = hand.wrist_site
         centre = site.rot.T @ (np.asarray(hand.grasp_probe.pos, float) - site.pos)
-        grasp = TabletopGrasp(centre=centre, close=dict(hand.grasp_probe.close), late=(), held=())
+        grasp = TabletopGrasp(centre=centre, close=dict(hand.grasp_probe.close), late=())
     else:
-        grasp = TabletopGrasp(centre=np.zeros(3), close={}, late=(), held=())
+        grasp = TabletopGrasp(centre=np.zeros(3), close={}, late=())
     return dataclasses.replace(grasp, centre=mirror_vec(grasp.centre)) if side == "left" else grasp
 
 
@@ -81,7 +81,7 @@ class Keyframe:
     end_step: int
     pos: np.ndarray
     quat: np.ndarray
-    closure: np.ndarray     # (early, late, held)
+    closure: np.ndarray     # (early, late)
 
 
 class SideTimeline:
@@ -132,12 +132,12 @@ class ScriptedOperator:
             far = np.where(np.abs(hi - open_) >= np.abs(lo - open_), hi, lo)
             closed = open_ + CLOSED_FRACTION * (far - open_)
             grasp = hand_grasp(hand, side)
-            group = np.zeros(len(hand_ids), int)       # index into the closure triple
+            group = np.zeros(len(hand_ids), int)       # index into the closure pair
             for i, name in enumerate(lay.hand_actuators):
                 short = name.removeprefix(f"{side}_")
                 if short in grasp.close:
                     closed[i] = np.clip(grasp.close[short], lo[i], hi[i])
-                group[i] = 2 if short in grasp.held else 1 if short in grasp.late else 0
+                group[i] = 1 if short in grasp.late else 0
             q_home = self.ctrl_home[arm_ids]
             pos0, quat0 = kin.fk(q_home)
             start = STAGGER_STEPS if side == "left" else 0
@@ -181,9 +181,8 @@ class ScriptedOperator:
         # have slipped while carried) and corrects every later keyframe of this pick for it
         first = len(tl.frames)
         tl.add(DURATIONS["lower"], pos=place)
-        tl.add(DURATIONS["open"], closure=RELEASED)
-        tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
         tl.add(DURATIONS["open"], closure=OPEN)
+        tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
         carried_at = tl.frames[first - 1].end_step
         side["corrections"].append((carried_at, item["pick"], offset, slice(first, len(tl.frames))))
 

@@ -37,3 +37,11 @@ def test_record_replay_validate(tmp_path):
     assert runner.invoke(cli, ["validate", str(episodes[0])]).exit_code == 0
     (tmp_path / "junk.hdf5").write_bytes(b"not hdf5")
     assert runner.invoke(cli, ["validate", str(tmp_path / "junk.hdf5")]).exit_code == 1
+
+
+def test_record_refuses_a_task_without_a_demonstration_plan(tmp_path):
+    result = CliRunner().invoke(cli, ["record", "--task", "trash_disposal", "--embodiment", EMBODIMENT,
+                                      "--episodes", "1", "--out", str(tmp_path)])
+    assert result.exit_code == 2
+    assert "trash_disposal.yaml: field 'demo_plan'" in result.output
+    assert not list(tmp_path.iterdir())

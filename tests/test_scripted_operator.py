@@ -12,7 +12,7 @@ from sim.tasks import load_task, parse_task
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator, hand_grasp
 
-SEED = 2      # a demonstration sample in which all four fruit reach the plate at some point
+SEED = 0      # a demonstration sample in which all four fruit stay on the plate
 
 
 @pytest.fixture(scope="module")
@@ -31,11 +31,19 @@ def test_fruit_is_lifted_and_placed(recording):
     assert recording.extra["lscr"] >= 0.75
 
 
+def test_episode_reaches_stable_success(recording):
+    """All four fruit on the plate and at rest for the dwell time: reach-and-stop ends it early."""
+    record = recording.extra["episode_record"]
+    assert recording.success, f"final stages {record['stage_final']}, drop {record['drop']}"
+    assert record["termination"] != "horizon" and record["steps_to_stable"] is not None
+    assert not record["drop"] and not record["high_speed"]
+
+
 def test_left_grasp_mirrors_right():
     hand = description.load_embodiment("ur5_rh5dg2").hand
     right, left = hand_grasp(hand, "right"), hand_grasp(hand, "left")
     assert np.allclose(left.centre, right.centre * [-1, 1, 1])
-    assert right.late == ("thumb_yaw", "thumb_flex") and right.held == ("thumb_yaw",)
+    assert right.late == ("thumb_yaw", "thumb_flex")
 
 
 def test_tabletop_grasp_with_unknown_actuator_names_file_and_field(tmp_path, monkeypatch):

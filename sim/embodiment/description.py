@@ -244,7 +244,6 @@ class TabletopGrasp:
     centre: np.ndarray          # object centre in the wrist-site frame (x lateral, y palm normal, z fingers)
     close: dict[str, float]     # actuator -> closing target
     late: tuple[str, ...]       # actuators that close only after the others have formed a wall
-    held: tuple[str, ...]       # late actuators kept closed on release until the hand is clear
 
 
 @dataclass(frozen=True)
@@ -741,10 +740,9 @@ def load_hand(name: str) -> HandDescription:
         gctx = ctx.sub("tabletop_grasp")
         close = {str(k): float(v) for k, v in _get(g, "close", gctx).items()}
         late = tuple(str(k) for k in g.get("late", []))
-        held = tuple(str(k) for k in g.get("held", []))
-        for field_name, keys in (("close", close), ("late", late), ("held", held)):
+        for field_name, keys in (("close", close), ("late", late)):
             _check_actuators(keys, act_names, gctx.sub(field_name))
-        tabletop = TabletopGrasp(centre=_vec(_get(g, "centre", gctx), 3, gctx.sub("centre")), close=close, late=late, held=held)
+        tabletop = TabletopGrasp(centre=_vec(_get(g, "centre", gctx), 3, gctx.sub("centre")), close=close, late=late)
     return HandDescription(
         name=str(data.get("name", name)), display_name=str(data.get("display_name", name)),
         source=str(_get(data, "source", ctx)), assumptions=str(data.get("assumptions", "")),
