@@ -4,6 +4,7 @@ anything falling through, and each stage predicate holds in a placed state and f
 from functools import lru_cache
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 import yaml
@@ -13,10 +14,10 @@ from task_scenes import settle
 from sim.embodiment import embodiment_names
 from sim.registry import names, paper_settings
 from sim.scene.builder import build_scene
-from sim.scene.meshes import tactile_targets
 from sim.scene.parts import parts_aabb
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task
+from tactile.targets import geom_mesh, target_geoms
 
 STATES = yaml.safe_load((Path(__file__).parent / "task_stage_states.yaml").read_text())
 PENETRATION_TOLERANCE_M = 0.003   # deepest contact of an object with the table or another object
@@ -87,17 +88,34 @@ def test_stage_predicates_hold_and_fail_in_placed_states(task):
         assert not stage_value(scene, stage, states["viol"]), f"{stage['id']}: violating state holds"
 
 
+def _body_mesh_bounds(model, geoms) -> np.ndarray:
+    """Bounds, in the body frame, of the tactile meshes of one body's geoms."""
+    corners = []
+    for gid in geoms:
+        rot = model.geom(gid).quat
+        mat = np.zeros(9)
+        mujoco.mju_quat2Mat(mat, rot)
+        vertices = geom_mesh(model, gid).vertices @ mat.reshape(3, 3).T + model.geom_pos[gid]
+        corners.append([vertices.min(axis=0), vertices.max(axis=0)])
+    corners = np.asarray(corners)
+    return np.array([corners[:, 0].min(axis=0), corners[:, 1].max(axis=0)])
+
+
 @pytest.mark.parametrize("task", names("tasks"))
 def test_every_object_and_link_has_a_tactile_mesh(task):
+    """The sensor's ray targets (every geom under the objects and distractors, never the robot or
+    the table) cover each object, link and distractor with meshes the size of its parts."""
     scene = _scene(task)
-    targets = {t.name: t for t in tactile_targets(scene)}
+    model = scene.model
+    by_body: dict[str, list[int]] = {}
+    for _, gid in target_geoms(model, [*scene.object_names, *scene.distractor_names]):
+        by_body.setdefault(model.body(int(model.geom_bodyid[gid])).name, []).append(gid)
     expected = set(scene.object_names) | set(scene.joint_names) | set(scene.distractor_names)
-    assert set(targets) == expected
+    assert set(by_body) == expected
     for name, obj in scene.task.objects.items():
         lo, hi = parts_aabb(obj.parts)
-        assert np.allclose(targets[name].mesh.bounds, [lo, hi], atol=2e-3), name
-        assert scene.model.body(targets[name].body).id > 0
+        assert np.allclose(_body_mesh_bounds(model, by_body[name]), [lo, hi], atol=2e-3), name
         for link in obj.links:
-            mesh = targets[f"{name}/{link.name}"].mesh
             lo, hi = parts_aabb(link.parts)
-            assert np.allclose(mesh.bounds, [lo, hi], atol=2e-3), link.name
+            bounds = _body_mesh_bounds(model, by_body[f"{name}/{link.name}"])
+            assert np.allclose(bounds, [lo, hi], atol=2e-3), link.name

@@ -11,7 +11,8 @@ import numpy as np
 
 from sim import physics
 from sim.embodiment import add_bimanual_robot
-from sim.scene.objects import add_free_object, add_task_object, resting_height, yaw_quat
+from sim.scene.objects import add_free_object, add_task_object, yaw_quat
+from sim.scene.parts import Part, euler_quat
 from sim.scene.sample import SceneSample
 from sim.tasks import TaskSpec
 
@@ -109,7 +110,7 @@ def build_scene(task: TaskSpec, embodiment: str, sample: SceneSample) -> Scene:
     for i, d in enumerate(sample.distractors):
         name = f"distractor_{i}"
         size = [s * d["scale"] for s in d["size"]]
-        z = sample.table_height + resting_height(d["shape"], size) + PLACEMENT_GAP_M
+        z = sample.table_height + Part(d["shape"], tuple(size)).local_half_extents()[2] + PLACEMENT_GAP_M
         add_free_object(spec, name, d["shape"], size, d["mass"], 0.8, d["rgba"],
                         (d["xy"][0], d["xy"][1], z), yaw_quat(d["yaw_deg"]))
         distractor_names.append(name)
@@ -163,12 +164,6 @@ def _add_table(spec: mujoco.MjSpec, task: TaskSpec, sample: SceneSample) -> None
                        rgba=[0.3, 0.3, 0.3, 1], contype=0, conaffinity=0)
 
 
-def _rpy_quat(rpy_deg) -> np.ndarray:
-    quat = np.zeros(4)
-    mujoco.mju_euler2Quat(quat, np.deg2rad(np.asarray(rpy_deg, dtype=float)), "xyz")
-    return quat
-
-
 def _min_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Quaternion of the smallest rotation taking unit vector a onto unit vector b."""
     quat = np.zeros(4)
@@ -198,6 +193,6 @@ def _perturb_cameras(model: mujoco.MjModel, offsets: dict[str, dict], look_dista
         turned = np.zeros(4)
         mujoco.mju_mulQuat(turned, _min_rotation(axis, new_axis), quat)
         final = np.zeros(4)
-        mujoco.mju_mulQuat(final, turned, _rpy_quat(off["rpy_deg"]))
+        mujoco.mju_mulQuat(final, turned, np.asarray(euler_quat(off["rpy_deg"])))
         model.cam_pos[cid] = pos
         model.cam_quat[cid] = final

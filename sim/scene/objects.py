@@ -1,6 +1,6 @@
 """Task objects as MuJoCo bodies: a base body (free, or fixed in the world) carrying the object's
-primitive parts, plus its articulated links. Tactile meshes of the same parts are in
-`sim.scene.meshes`.
+primitive parts, plus its articulated links. The tactile layer ray-casts against these geoms
+(`tactile.targets`).
 """
 
 from __future__ import annotations
@@ -9,10 +9,9 @@ from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
-import trimesh
 
 from sim.scene.articulated import add_links
-from sim.scene.parts import GEOM_TYPES, pad_size, part_masses, primitive_mesh
+from sim.scene.parts import GEOM_TYPES, pad_size, part_masses
 
 if TYPE_CHECKING:
     from sim.tasks import ObjectSpec
@@ -53,14 +52,3 @@ def add_task_object(spec: mujoco.MjSpec, obj: ObjectSpec, pos, quat) -> None:
                       friction=[obj.friction, 0.01, obj.rolling_friction], rgba=list(part.rgba or obj.rgba),
                       **contact)
     add_links(spec, body, obj.name, obj.links, obj.friction, obj.rgba, {"condim": 4, "solref": OBJECT_SOLREF})
-
-
-def resting_height(shape: str, size) -> float:
-    """Half-height of a primitive above its support when upright."""
-    return {"box": size[-1] if len(size) == 3 else 0, "cylinder": size[-1], "sphere": size[0],
-            "ellipsoid": size[-1], "capsule": size[-1] + size[0]}[shape]
-
-
-def object_mesh(shape: str, size) -> trimesh.Trimesh:
-    """A watertight mesh of one primitive in its own frame (see `sim.scene.parts.primitive_mesh`)."""
-    return primitive_mesh(shape, size)

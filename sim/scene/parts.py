@@ -1,8 +1,8 @@
 """Object geometry as primitive parts, and the generated shapes built from them.
 
 A task object (or one link of an articulated object) is a list of parts: MuJoCo primitives placed
-in the object's frame. Physics collides the primitives; tactile ray casting uses a trimesh of the
-same parts. Generated shapes expand into primitives:
+in the object's frame. Physics collides the primitives; the tactile layer ray-casts against the
+same compiled geoms (`tactile.targets`). Generated shapes expand into primitives:
 
     {shape: box, size: [hx, hy, hz], pos: [x, y, z], euler_deg: [rx, ry, rz], rgba: [...]}
     {open_box: {size: [hx, hy, hz], wall: 0.01, open: +z}}      # tray, crate, cabinet (open: -y)
@@ -14,11 +14,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
 import mujoco
 import numpy as np
-import trimesh
 
 from sim.errors import SpecError
 
@@ -225,7 +223,7 @@ def parse_parts(path, field: str, raw) -> tuple[tuple[Part, ...], Cavity | None]
     return tuple(parts), (cavities[0] if len(cavities) == 1 else None)
 
 
-# ---------------------------------------------------------------- bounds, masses, meshes
+# ---------------------------------------------------------------- bounds and masses
 
 
 def parts_aabb(parts, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
@@ -237,36 +235,3 @@ def part_masses(parts, total_mass: float) -> list[float]:
     """The object's mass shared over its parts by volume (uniform density)."""
     volumes = np.array([p.volume for p in parts])
     return (total_mass * volumes / volumes.sum()).tolist()
-
-
-def primitive_mesh(shape: str, size) -> trimesh.Trimesh:
-    """A watertight mesh of a primitive in its own frame (MuJoCo conventions: cylinders and
-    capsules along z, sizes are half-lengths), fine enough that faceting stays well below the
-    tactile depth resolution."""
-    if shape == "box":
-        return trimesh.creation.box(extents=2 * np.asarray(size[:3]))
-    if shape == "sphere":
-        return trimesh.creation.icosphere(subdivisions=4, radius=size[0])
-    if shape == "ellipsoid":
-        mesh = trimesh.creation.icosphere(subdivisions=4, radius=1.0)
-        mesh.apply_scale(np.asarray(size[:3]))
-        return mesh
-    if shape == "cylinder":
-        return trimesh.creation.cylinder(radius=size[0], height=2 * size[1], sections=96)
-    if shape == "capsule":
-        return trimesh.creation.capsule(radius=size[0], height=2 * size[1], count=[48, 48])
-    raise ValueError(f"no mesh for shape '{shape}'; valid shapes: {sorted(SHAPE_SIZE_LEN)}")
-
-
-@lru_cache(maxsize=512)
-def parts_mesh(parts: tuple[Part, ...]) -> trimesh.Trimesh:
-    """One mesh of all parts in their common frame (for the tactile sensor's ray casting)."""
-    meshes = []
-    for p in parts:
-        mesh = primitive_mesh(p.shape, p.size)
-        tf = np.eye(4)
-        tf[:3, :3] = quat_matrix(p.quat)
-        tf[:3, 3] = p.pos
-        mesh.apply_transform(tf)
-        meshes.append(mesh)
-    return meshes[0] if len(meshes) == 1 else trimesh.util.concatenate(meshes)
