@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import trimesh
 
-from tactile.broadphase import LocalBox, boxes_overlap, ray_volume_box
+from tactile.broadphase import LocalBox, aabb_overlaps, boxes_overlap, ray_volume_box, world_aabbs
 from tactile.quantize import encode_tacmap
 from tactile.raycast import MeshRaycaster
 from tactile.surface import SurfaceMap
@@ -139,12 +139,12 @@ class TactileSensor:
     def candidate_pairs(self, site_poses: dict, target_poses: dict) -> list[tuple[str, str]]:
         """(site, target) pairs whose boxes overlap: the only pairs ``sense`` ray casts."""
         self._check_poses(site_poses, target_poses)
-        target_boxes = {n: t.box.in_world(*target_poses[n]) for n, t in self._targets.items()}
-        pairs = []
-        for name, rays in zip(self.site_names, self._rays):
-            site_box = rays.box.in_world(*site_poses[name])
-            pairs += [(name, t) for t, box in target_boxes.items() if boxes_overlap(site_box, box)]
-        return pairs
+        targets = list(self._targets)
+        target_boxes = [self._targets[n].box.in_world(*target_poses[n]) for n in targets]
+        site_boxes = [rays.box.in_world(*site_poses[n]) for n, rays in zip(self.site_names, self._rays)]
+        near = aabb_overlaps(world_aabbs(site_boxes), world_aabbs(target_boxes))
+        return [(self.site_names[s], targets[t]) for s, t in zip(*np.nonzero(near))
+                if boxes_overlap(site_boxes[s], target_boxes[t])]
 
     def sense(self, site_poses: dict, target_poses: dict) -> TactileFrame:
         """One frame: ``site_poses[name]`` and ``target_poses[name]`` are world (pos[3], rot[3, 3])."""

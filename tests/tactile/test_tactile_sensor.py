@@ -3,7 +3,7 @@ import pytest
 import trimesh
 from scipy.ndimage import binary_erosion
 
-from tactile.broadphase import LocalBox, boxes_overlap
+from tactile.broadphase import LocalBox, aabb_overlaps, boxes_overlap, world_aabbs
 from tactile.quantize import quantize_depth
 from tactile.raycast import MeshRaycaster
 from tactile.sensor import TactileSensor, TactileSite
@@ -156,6 +156,20 @@ def test_oriented_box_overlap_uses_edge_axes():
         assert boxes_overlap(a, b) is overlap
     assert boxes_overlap(unit.in_world(np.zeros(3), np.eye(3)), unit.in_world(np.array([1.9, 0, 0]), np.eye(3)))
     assert not boxes_overlap(unit.in_world(np.zeros(3), np.eye(3)), unit.in_world(np.array([2.1, 0, 0]), np.eye(3)))
+
+
+def test_world_aabb_prefilter_keeps_every_pair_the_exact_test_keeps():
+    rng = np.random.default_rng(0)
+
+    def random_boxes(n):
+        return [LocalBox(rng.uniform(-0.02, 0.02, 3), rng.uniform(0.005, 0.03, 3)).in_world(
+            rng.uniform(-0.08, 0.08, 3), rotation(rng.normal(size=3), rng.uniform(0, np.pi))) for _ in range(n)]
+
+    sites, targets = random_boxes(40), random_boxes(60)
+    near = aabb_overlaps(world_aabbs(sites), world_aabbs(targets))
+    exact = np.array([[boxes_overlap(a, b) for b in targets] for a in sites])
+    assert exact.any() and (near & ~exact).any()     # the sample has both kinds of pair
+    assert not (exact & ~near).any()
 
 
 def test_sensor_rejects_bad_setup(flat_surface, round_pad):
