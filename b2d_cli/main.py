@@ -182,28 +182,27 @@ def bench(part, profile, steps) -> None:
 
 
 @cli.command()
-@click.option("--setting", "settings_", multiple=True, help="Setting key(s); default: every available setting.")
+@click.option("--setting", "settings_", multiple=True, help="Setting key(s); default: every setting the scripted operator can record.")
 @click.option("--profile", default=None, help="Sensor profile (default: $B2D_PROFILE or preview).")
 @click.option("--episodes", default=None, type=int, help="Demonstrations per setting.")
 @click.option("--eval-episodes", default=None, type=int, help="Rollouts per (setting, channel).")
 @click.option("--max-steps", default=None, type=int, help="Cap on control steps per episode.")
 def materialize(settings_, profile, episodes, eval_episodes, max_steps) -> None:
     """Materialize the whole asset chain (recordings -> ... -> evaluation table) with Dagster."""
-    import os
-
     import dagster as dg
 
     from b2d_pipeline.demo import materialize_chain
     from b2d_pipeline.partitions import setting_keys
-    from b2d_pipeline.settings import FactorySettings, default_dagster_home
+    from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
     overrides = {k: v for k, v in {"profile": profile, "demo_episodes": episodes, "eval_episodes": eval_episodes,
                                    "max_steps": max_steps}.items() if v is not None}
     settings = FactorySettings.from_env(**overrides)
     for key in settings_:
         registry.parse_setting_key(key)
-    home = os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home(settings.data_root)))
-    os.makedirs(home, exist_ok=True)
+        if key not in setting_keys():    # the partitions hold only settings the operator can record
+            raise UnknownNameError("recordable setting", key, setting_keys())
+    use_default_dagster_home(settings.data_root).mkdir(parents=True, exist_ok=True)
     with dg.DagsterInstance.get() as instance:
         results = materialize_chain(settings, list(settings_) or setting_keys(), instance,
                                     log=lambda m: click.echo(m, err=True))

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import os
 
 import dagster as dg
 
 from b2d_pipeline import checks, schedules
 from b2d_pipeline.assets import episodes, evaluation, recordings, renders, replays
 from b2d_pipeline.resources import EpisodeStore
-from b2d_pipeline.settings import FactorySettings, default_dagster_home
+from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
 
 def build_definitions(settings: FactorySettings | None = None) -> dg.Definitions:
@@ -27,6 +26,5 @@ def build_definitions(settings: FactorySettings | None = None) -> dg.Definitions
 
 
 _settings = FactorySettings.from_env()
-# DAGSTER_HOME follows B2D_DATA_ROOT, so a separate data root keeps its own run history
-os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home(_settings.data_root)))
+use_default_dagster_home(_settings.data_root)
 defs = build_definitions(_settings)

@@ -42,3 +42,9 @@ class FactorySettings:
 
 def default_dagster_home(data_root: Path | None = None) -> Path:
     return Path(data_root or REPO_ROOT / "data") / "dagster_home"
+
+
+def use_default_dagster_home(data_root: Path | None = None) -> Path:
+    """DAGSTER_HOME follows B2D_DATA_ROOT unless set, so a separate data root keeps its own run
+    history. Returns the folder in use (not created here: importing definitions writes nothing)."""
+    return Path(os.environ.setdefault("DAGSTER_HOME", str(default_dagster_home(data_root))))

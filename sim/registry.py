@@ -196,7 +196,7 @@ def paper_settings() -> tuple[Setting, ...]:
     path = CATALOG / "settings.yaml"
     out = []
     for i, s in enumerate(load_yaml(path)["paper_settings"]):
-        flag = s.get("available", False)
+        flag = s.get("available", True)
         if not isinstance(flag, bool):
             raise SpecError(path, f"paper_settings[{i}].available", "true or false", flag)
         out.append(Setting(s["task"], s["embodiment"], flag))

@@ -101,7 +101,7 @@ class SideTimeline:
                                     last.quat if quat is None else np.asarray(quat, float),
                                     last.closure if closure is None else np.asarray(closure, float)))
 
-    def at(self, step: int) -> tuple[np.ndarray, np.ndarray, float]:
+    def at(self, step: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         prev = self.frames[0]
         for frame in self.frames[1:]:
             if step < frame.end_step:

@@ -45,3 +45,14 @@ def test_record_refuses_a_task_without_a_demonstration_plan(tmp_path):
     assert result.exit_code == 2
     assert "trash_disposal.yaml: field 'demo_plan'" in result.output
     assert not list(tmp_path.iterdir())
+
+
+def test_materialize_refuses_a_setting_the_operator_cannot_record(tmp_path, monkeypatch):
+    from sim.tasks import load_task
+
+    monkeypatch.setenv("B2D_DATA_ROOT", str(tmp_path))
+    key = f"trash_disposal__{load_task('trash_disposal').paper_embodiment}"
+    result = CliRunner().invoke(cli, ["materialize", "--setting", key])
+    assert result.exit_code == 2
+    assert f"unknown recordable setting '{key}'" in result.output and TASK in result.output
+    assert not list(tmp_path.iterdir())

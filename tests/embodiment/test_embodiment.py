@@ -103,7 +103,7 @@ def test_joint_limits_respected(embodiment, scene):
                 if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE and model.jnt_limited[j]:
                     lo, hi = model.jnt_range[j]
                     v = q[model.jnt_qposadr[j]]
-                    assert lo - 0.05 <= v <= hi + 0.05, f"{model.joint(j).name}={v:.3f} outside [{lo}, {hi}]"
+                    assert lo - 0.03 <= v <= hi + 0.03, f"{model.joint(j).name}={v:.3f} outside [{lo}, {hi}]"
     assert np.all(np.isfinite(data.qpos))
 
 

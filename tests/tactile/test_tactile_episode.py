@@ -150,8 +150,9 @@ def test_a_sphere_pressed_1mm_into_one_pad_shows_on_that_site_only(grasp_raw):
 
 
 def test_same_raw_gives_byte_identical_tactile(grasp_raw, episode, tmp_path):
-    """Replay is byte-identical across processes (tests/test_replay.py); so must tactile be, even
-    with the surface maps generated afresh."""
+    """A second render of the same replay, with the surface maps and ray targets built afresh, gives
+    byte-identical tactile arrays. (Within one process; the cross-process check is for replay,
+    tests/test_replay.py.)"""
     from tactile.rig import clear_caches
 
     clear_caches()
