@@ -5,10 +5,11 @@ frame) and the unit inward normal (towards the finger interior); cells without s
 as in the released Sharpa TacMap assets. Files: ``{group}_point.npy`` and ``{group}_normal.npy``,
 float32 (H, W, 3).
 
-Generation casts one ray per cell from the pad's outward side along ``-normal`` onto the pad mesh.
-Grid: square window centred on the pad, side ``max(length, width) * (1 + 2 * margin)``; row index
-increases along the pad axis, column index along ``axis x normal``. Normals are interpolated from
-vertex normals (``smooth_shade`` keeps sharp edges sharp) and oriented against the casting rays.
+Generation casts one ray per cell from the pad's outward side along ``-normal`` onto a contact mesh
+(the pad sheet of ``tactile.pads``, or the compiled pad geom, see ``tactile.rig``). Grid: square
+window centred on the pad, side ``max(length, width) * (1 + 2 * margin)``; row index increases along
+the pad axis, column index along ``axis x normal``. Normals are interpolated from vertex normals
+(``smooth_shade`` keeps sharp edges sharp) and oriented against the casting rays.
 """
 
 from __future__ import annotations
@@ -101,21 +102,42 @@ def surface_map_from_mesh(
     )
 
 
-def surface_map_from_pad(pad: PadSpec, resolution: int = NATIVE_RESOLUTION, group: str = "pad") -> SurfaceMap:
-    """Surface map of a declarative pad (see ``tactile.pads``)."""
-    side = max(pad.length, pad.width) * (1 + 2 * GRID_MARGIN)
-    return surface_map_from_mesh(build_pad_mesh(pad), pad.center, pad.frame(), side, resolution, group)
+def pad_grid_side(pad: PadSpec) -> float:
+    """Side of the square grid window of ``pad`` (metres): the longer pad side plus the margins."""
+    return max(pad.length, pad.width) * (1 + 2 * GRID_MARGIN)
 
 
-def mirror_surface_map(surface: SurfaceMap) -> SurfaceMap:
-    """The surface reflected through the attach-body yz plane (x negated in points and normals).
+def surface_map_from_pad(
+    pad: PadSpec, resolution: int = NATIVE_RESOLUTION, group: str = "pad", mesh: trimesh.Trimesh | None = None
+) -> SurfaceMap:
+    """Surface map on the grid of a declarative pad (see ``tactile.pads``).
 
-    A left hand is the right one mirrored by ``diag(-1, 1, 1)`` (``sim.embodiment.mirror``); its
-    maps keep the right hand's grid, so one pixel is the same spot of the finger on both sides.
+    ``mesh`` (attach-body frame) is what is rasterised; by default the pad's own contact sheet.
     """
-    flip = np.array([-1.0, 1.0, 1.0], dtype=np.float32)
-    # + 0 turns the -0.0 of empty cells back into 0.0: mirrored maps stay byte-stable
-    return SurfaceMap(surface.group, surface.point_mm * flip + 0, surface.normal * flip + 0)
+    mesh = build_pad_mesh(pad) if mesh is None else mesh
+    return surface_map_from_mesh(mesh, pad.center, pad.frame(), pad_grid_side(pad), resolution, group)
+
+
+def _apply(matrix: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """matrix @ v for (..., 3) vectors in float64, summed in a fixed order (no BLAS): byte-stable float32."""
+    m, v = np.asarray(matrix, dtype=np.float64), np.asarray(vectors, dtype=np.float64)
+    out = np.empty(v.shape, dtype=np.float64)
+    for i in range(3):
+        out[..., i] = m[i, 0] * v[..., 0] + m[i, 1] * v[..., 1] + m[i, 2] * v[..., 2]
+    return (out + 0.0).astype(np.float32)  # + 0 turns -0.0 (empty cells times -1) back into 0.0
+
+
+def reflected_surface_map(surface: SurfaceMap, reflection, group: str) -> SurfaceMap:
+    """The surface moved by the orthogonal ``reflection`` (points and normals alike), named ``group``.
+
+    The left hand is the right one reflected by ``sim.embodiment.mirror.M`` (the caller passes it);
+    the reflected maps keep the right hand's grid, so one pixel is the same spot of the finger on
+    both sides.
+    """
+    reflection = np.asarray(reflection, dtype=np.float64)
+    if reflection.shape != (3, 3) or not np.allclose(reflection @ reflection.T, np.eye(3), atol=1e-9):
+        raise ValueError(f"reflection must be an orthogonal 3x3 matrix, got {reflection.tolist()}")
+    return SurfaceMap(group, _apply(reflection, surface.point_mm), _apply(reflection, surface.normal))
 
 
 def surface_map_paths(directory, group: str) -> tuple[Path, Path]:
@@ -125,17 +147,24 @@ def surface_map_paths(directory, group: str) -> tuple[Path, Path]:
 
 def save_surface_map(surface: SurfaceMap, directory) -> tuple[Path, Path]:
     """Write ``{group}_point.npy`` (mm) and ``{group}_normal.npy`` (inward) as float32 (H, W, 3)."""
+    from episodes.atomic import atomic_path   # write-then-rename: never a half-written asset
+
     point_path, normal_path = surface_map_paths(directory, surface.group)
-    point_path.parent.mkdir(parents=True, exist_ok=True)
-    np.save(point_path, np.ascontiguousarray(surface.point_mm, dtype=np.float32), allow_pickle=False)
-    np.save(normal_path, np.ascontiguousarray(surface.normal, dtype=np.float32), allow_pickle=False)
+    for path, array in ((point_path, surface.point_mm), (normal_path, surface.normal)):
+        with atomic_path(path) as tmp, open(tmp, "wb") as f:
+            np.save(f, np.ascontiguousarray(array, dtype=np.float32), allow_pickle=False)
     return point_path, normal_path
 
 
 def _load_map(path: Path, field: str) -> np.ndarray:
     if not path.is_file():
         raise TactileSpecError(path, field, "an existing .npy file")
-    array = np.load(path, allow_pickle=False)
+    try:
+        array = np.load(path, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as exc:     # not .npy, truncated, or an object array
+        raise TactileSpecError(path, field, "a readable .npy array (no pickles)", str(exc)) from None
+    if not isinstance(array, np.ndarray):               # an .npz archive
+        raise TactileSpecError(path, field, "a single .npy array", type(array).__name__)
     if array.ndim != 3 or array.shape[2] != 3 or array.shape[0] < 1 or array.shape[1] < 1:
         raise TactileSpecError(path, field, "an array of shape (H, W, 3)", array.shape)
     if not np.issubdtype(array.dtype, np.floating):

@@ -89,6 +89,16 @@ def geom_mesh(model: mujoco.MjModel, geom_id: int) -> trimesh.Trimesh:
     return trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
 
 
+def geom_mesh_in_body(model: mujoco.MjModel, geom_id: int) -> trimesh.Trimesh:
+    """A geom as a triangle mesh in the frame of the body that holds it (compiled pose applied)."""
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, model.geom_quat[geom_id])
+    transform = np.eye(4)
+    transform[:3, :3] = rot.reshape(3, 3)
+    transform[:3, 3] = model.geom_pos[geom_id]
+    return geom_mesh(model, geom_id).apply_transform(transform)
+
+
 @functools.lru_cache(maxsize=256)
 def _primitive_raycaster(gtype: int, size: tuple[float, ...]) -> MeshRaycaster:
     return MeshRaycaster(primitive_mesh(gtype, size))

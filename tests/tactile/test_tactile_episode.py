@@ -87,6 +87,12 @@ def test_episode_with_tactile_validates_and_has_the_declared_layout(episode):
         right = f[f"{ROOT}/surface/right_index_tip/point_mm"][()]
         left = f[f"{ROOT}/surface/left_index_tip/point_mm"][()]
         assert np.array_equal(left, right * np.float32([-1, 1, 1]) + 0) and np.abs(right).max() > 1
+        # the hand file's grouping policy: side-specific thumb/4F, one asset per group and side
+        assert meta["grouping"] == "side_specific"
+        assets = {s["name"]: s["asset"] for s in meta["sites"]}
+        assert assets["right_index_tip"] == assets["right_little_tip"] == "R4F" and assets["left_thumb_tip"] == "LTH"
+        little = f[f"{ROOT}/surface/right_little_tip/point_mm"][()]
+        assert np.array_equal(little, right)
 
 
 def test_fingertip_pressing_an_object_gives_tactile_and_free_frames_are_zero(grasp_raw, episode):

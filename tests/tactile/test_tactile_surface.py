@@ -2,9 +2,11 @@ import numpy as np
 import pytest
 
 from tactile.errors import TactileSpecError
+from sim.embodiment.mirror import M
 from tactile.surface import (
     SurfaceMap,
     load_surface_map,
+    reflected_surface_map,
     save_surface_map,
     surface_map_from_pad,
     surface_map_paths,
@@ -55,6 +57,18 @@ def test_subsample_steps(flat_surface, round_pad):
         flat_surface.subsample(0)
 
 
+def test_reflection_by_the_embodiment_mirror(round_pad):
+    right = surface_map_from_pad(round_pad, resolution=24, group="R4F")
+    left = reflected_surface_map(right, M, "L4F")
+    assert left.group == "L4F" and left.point_mm.dtype == np.float32
+    assert np.array_equal(left.point_mm[..., 0], -right.point_mm[..., 0] + 0)  # x negated, no -0.0
+    assert np.array_equal(left.point_mm[..., 1:], right.point_mm[..., 1:])
+    assert np.array_equal(left.normal[..., 0], -right.normal[..., 0] + 0)
+    assert not np.signbit(left.point_mm[~left.valid]).any()
+    with pytest.raises(ValueError, match="orthogonal"):
+        reflected_surface_map(right, np.diag([2.0, 1.0, 1.0]), "L4F")
+
+
 def test_save_and_load_roundtrip(tmp_path, flat_surface):
     point_path, normal_path = save_surface_map(flat_surface, tmp_path)
     assert (point_path, normal_path) == surface_map_paths(tmp_path, "FLAT")
@@ -83,6 +97,18 @@ def test_load_errors_name_file_and_field(tmp_path, flat_surface):
         load_surface_map(point_path, normal_path, "sideways")
     with pytest.raises(TactileSpecError, match="existing .npy file"):
         load_surface_map(tmp_path / "missing_point.npy", normal_path, "inward")
+    bad.write_bytes(b"")
+    with pytest.raises(TactileSpecError, match=r"BAD_normal\.npy: field 'normal': expected a readable \.npy"):
+        load_surface_map(point_path, bad, "inward")
+    np.save(bad, np.array([object()] * 3, dtype=object), allow_pickle=True)
+    with pytest.raises(TactileSpecError, match=r"field 'normal': expected a readable \.npy array \(no pickles\)"):
+        load_surface_map(point_path, bad, "inward")
+
+
+def test_save_leaves_no_temporary_files(tmp_path, flat_surface):
+    save_surface_map(flat_surface, tmp_path)
+    save_surface_map(flat_surface, tmp_path)     # replaces the first pair
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["FLAT_normal.npy", "FLAT_point.npy"]
 
 
 def sharpa(group):
