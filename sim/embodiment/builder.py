@@ -10,11 +10,15 @@ and max speed ``v_max``
 
 * ``kp = effort / e_sat``: the servo applies its full torque at a tracking error ``e_sat``
   (``servo_error_at_full_effort`` of the arm / hand file; 0.05 rad arms, 0.1 rad hands);
-* ``kv = max(effort / v_max, 2 sqrt(kp I))``: at least critically damped for the joint-space inertia
-  ``I`` at home (Pinocchio CRBA for arms incl. the hand payload and armature; distal links plus
-  armature for fingers), and never faster than the real joint: with the force clamped to
-  ``+-effort`` the servo's terminal speed ``effort / kv`` is at most ``v_max``, so a step command
-  is tracked at (or below) the real joint speed;
+* motor damping ``d = effort / v_max`` on the driven joint (added to the file's joint damping): with
+  the servo saturated the joint torque is ``effort - d qdot``, the linear torque-speed line of a
+  geared motor (full torque at rest, none at the no-load speed ``v_max``), so a step command is
+  tracked at (or below) the real joint speed whatever its size. It must be joint damping, not the
+  servo's ``kv``: MuJoCo clamps ``kp e - kv qdot`` as a whole, so a large step keeps the force at
+  ``effort`` until ``qdot ~ kp e / kv`` (fingers reached 5x their real speed that way);
+* ``kv = max(0, 2 sqrt(kp I) - d)``: together with ``d`` at least critically damped for the
+  joint-space inertia ``I`` at home (Pinocchio CRBA for arms incl. the hand payload and armature;
+  distal links plus armature for fingers);
 * ``forcerange = +-effort``, ``ctrlrange = joint range``.
 
 Robot bodies are gravity compensated (``gravcomp = 1``): real arm and hand controllers compensate
@@ -171,11 +175,19 @@ def _position_actuator(spec: mujoco.MjSpec, name: str, joint: str, rng, effort: 
     return act
 
 
-def servo_gains(effort: float, v_max: float, inertia: float, e_sat: float) -> tuple[float, float]:
-    """The gain rule of the module docstring."""
+def servo_gains(effort: float, v_max: float, inertia: float, e_sat: float) -> tuple[float, float, float]:
+    """The gain rule of the module docstring: (kp, kv, motor damping)."""
     kp = effort / e_sat
-    kv = max(effort / v_max, 2.0 * math.sqrt(kp * inertia))
-    return kp, kv
+    damping = effort / v_max
+    kv = max(0.0, 2.0 * math.sqrt(kp * inertia) - damping)
+    return kp, kv, damping
+
+
+def _add_motor_damping(spec: mujoco.MjSpec, joint: str, damping: float) -> None:
+    j = spec.joint(joint)
+    d = np.array(j.damping, dtype=float)
+    d[0] += damping
+    j.damping = d
 
 
 def _finger_inertia(hand: HandDescription, joint_name: str) -> float:
@@ -217,7 +229,7 @@ def _hand_home(hand: HandDescription) -> dict[str, float]:
 
 
 @functools.lru_cache(maxsize=None)
-def _home_arm(name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def home_arm_angles(name: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Home arm joint angles per side: IK of the embodiment's home wrist pose (left mirrored),
     seeded with the arm file's elbow-up seed (deterministic)."""
     emb = load_embodiment(name)
@@ -269,7 +281,7 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
                    fromto=[0, 0.05, torso_size[2], 0, 0.05, torso_size[2] + 0.2], size=[0.025, 0, 0],
                    rgba=list(TORSO_RGBA))
     inv_torso = torso_tf.inverse()
-    home_left, home_right = _home_arm(emb.name)
+    home_left, home_right = home_arm_angles(emb.name)
     home_arm = {"left": np.array(home_left), "right": np.array(home_right)}
     hand_q = _hand_home(hand)
     hand_poses = hand_link_poses(hand)
@@ -336,16 +348,18 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
         M = k.joint_space_inertia(home_arm[side])
         arm_acts = []
         for i, j in enumerate(arm.joints):
-            kp, kv = servo_gains(j.effort, j.velocity, float(M[i, i]), arm.servo_error_at_full_effort)
+            kp, kv, d = servo_gains(j.effort, j.velocity, float(M[i, i]), arm.servo_error_at_full_effort)
             _position_actuator(spec, p + j.name, p + j.name, j.range, j.effort, kp, kv)
+            _add_motor_damping(spec, p + j.name, d)
             arm_acts.append(p + j.name)
             ctrl.append(float(home_arm[side][i]))
         hand_acts = []
         for a in hand.actuators:
             j = hand.joint(a.joint)
-            kp0, kv0 = servo_gains(a.effort, a.velocity, _finger_inertia(hand, a.joint), hand.servo_error_at_full_effort)
+            kp0, kv0, d = servo_gains(a.effort, a.velocity, _finger_inertia(hand, a.joint), hand.servo_error_at_full_effort)
             _position_actuator(spec, p + a.name, p + a.joint, j.range, a.effort,
                                a.kp if a.kp is not None else kp0, a.kv if a.kv is not None else kv0)
+            _add_motor_damping(spec, p + a.joint, d)
             hand_acts.append(p + a.name)
             ctrl.append(hand_q[a.joint])
         for c in hand.couplings:

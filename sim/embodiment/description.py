@@ -169,6 +169,9 @@ class ArmDescription:
     servo_error_at_full_effort: float
     contact_exclude: tuple[tuple[str, str], ...]
     path: Path
+    # radius (m) around the bimanual home wrist pose in which palm-down wrist poses are reached
+    # (``reach.home_radius_m``, measured with ``python -m sim.embodiment.reach``)
+    reach_m: float
 
     @property
     def joints(self) -> list[JointSpec]:
@@ -567,6 +570,8 @@ def load_arm(name: str) -> ArmDescription:
         servo_error_at_full_effort=_num(data.get("servo_error_at_full_effort", 0.05), ctx.sub("servo_error_at_full_effort"), True),
         contact_exclude=_excludes(data, ctx, {link.name for link in links}),
         path=path,
+        reach_m=_num(_get(_get(data, "reach", ctx), "home_radius_m", ctx.sub("reach")),
+                     ctx.sub("reach.home_radius_m"), positive=True),
     )
 
 

@@ -11,6 +11,7 @@ import sim.physics as physics
 from sim.embodiment import add_bimanual_robot
 from sim.embodiment.description import load_embodiment
 from sim.embodiment.mirror import mirror_vec
+from sim.scene.objects import add_free_object
 
 TABLE_TOP_Z = 0.75
 
@@ -36,13 +37,11 @@ def robot_scene(name: str, with_probes: bool = False):
             pos_h = probe.pos if side == "right" else mirror_vec(probe.pos)
             axis_h = probe.axis if side == "right" else mirror_vec(probe.axis)
             pos_w = p + R @ pos_h
-            body = spec.worldbody.add_body(name=f"{side}_probe", pos=pos_w)
-            body.add_freejoint(name=f"{side}_probe_free")
-            a = R @ axis_h
-            body.add_geom(name=f"{side}_probe_geom", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
-                          fromto=np.concatenate([-a * probe.half_length, a * probe.half_length]),
-                          size=[probe.radius, 0, 0], mass=probe.mass, friction=[1.0, 0.01, 0.001],
-                          condim=4, rgba=[0.9, 0.5, 0.1, 1])
+            # built like a task object (same contact stiffness), the cylinder axis along axis_h
+            quat = np.zeros(4)
+            mujoco.mju_quatZ2Vec(quat, R @ axis_h)
+            add_free_object(spec, f"{side}_probe", "cylinder", [probe.radius, probe.half_length], probe.mass,
+                            1.0, [0.9, 0.5, 0.1, 1], pos_w, quat)
     model = spec.compile()
     return model, layout
 

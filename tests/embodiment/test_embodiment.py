@@ -1,4 +1,5 @@
-"""Every embodiment in sim/catalog/embodiments: build, rest, limits, grasp, IK, FK, cameras, mirror."""
+"""Every embodiment in sim/catalog/embodiments: build, rest, limits, servo speed, couplings, grasp, reach, IK, FK,
+cameras (render, calibration), mirror."""
 
 from __future__ import annotations
 
@@ -8,11 +9,15 @@ import os
 import mujoco
 import numpy as np
 import pytest
+import yaml
 
 import sim.physics as physics
-from sim.embodiment import embodiment_names, load_embodiment
+from sim.embodiment import ArmKinematics, description, embodiment_names, load_embodiment
+from sim.embodiment.builder import home_arm_angles
 from sim.embodiment.description import CAMERA_NAMES, mat_to_quat, quat_to_mat
-from sim.embodiment.mirror import M, side_transform
+from sim.embodiment.mirror import M
+from sim.embodiment.reach import reach_along
+from sim.render import MJ_TO_CV, intrinsic_matrix
 
 from embodiment_scenes import fresh_data, robot_scene
 
@@ -32,6 +37,19 @@ def rot_err(Ra, Rb) -> float:
 def test_unknown_embodiment_lists_valid_names():
     with pytest.raises(ValueError, match="ur5_rh5dg2"):
         load_embodiment("no_such_robot")
+
+
+def test_arm_without_reach_names_file_and_field(tmp_path, monkeypatch):
+    raw = yaml.safe_load((description.ARMS_DIR / "rm65.yaml").read_text())
+    del raw["reach"]
+    (tmp_path / "rm65.yaml").write_text(yaml.safe_dump(raw))
+    monkeypatch.setattr(description, "ARMS_DIR", tmp_path)
+    description.load_arm.cache_clear()
+    try:
+        with pytest.raises(ValueError, match=r"rm65.yaml: field 'reach': .*missing"):
+            description.load_arm("rm65")
+    finally:
+        description.load_arm.cache_clear()
 
 
 def test_compiles_and_layout(embodiment, scene):
@@ -107,71 +125,177 @@ def test_joint_limits_respected(embodiment, scene):
     assert np.all(np.isfinite(data.qpos))
 
 
-# Known open issue: in these hands (three flexion links with a coupled distal joint) the proximal
-# phalanges flick the probe out of the hand while closing; the grasp_probe placement / closing
-# sequence still needs tuning. strict: the test reports when they start passing.
-GRASP_KNOWN_FAILING = {"jaka_zu7_dexhand021", "panda_orca", "ur5_shadow"}
+def test_coupled_joints_follow_their_master(embodiment, scene):
+    """Mimic joints are joint equalities: with the hand driven to mid-range, every coupled joint sits
+    where its coupling polynomial of the master puts it."""
+    model, layout = scene
+    hand = load_embodiment(embodiment).hand
+    data = fresh_data(model, layout)
+    ctrl = layout.home_ctrl.copy()
+    for s in SIDES:
+        for a in hand.actuators:
+            lo, hi = model.actuator_ctrlrange[model.actuator(f"{s}_{a.name}").id]
+            ctrl[layout.actuator_names.index(f"{s}_{a.name}")] = (lo + hi) / 2
+    for _ in range(60):
+        physics.step_control(model, data, ctrl)
+    assert model.neq == 2 * len(hand.couplings)
+    for s in SIDES:
+        for c in hand.couplings:
+            master = data.qpos[model.joint(f"{s}_{c.master}").qposadr[0]]
+            follower = data.qpos[model.joint(f"{s}_{c.joint}").qposadr[0]]
+            expected = np.clip(sum(k * master ** i for i, k in enumerate(c.polycoef)), *hand.joint(c.joint).range)
+            assert abs(follower - expected) < 0.01, f"{s}_{c.joint} = {follower:.3f}, coupling gives {expected:.3f}"
 
 
-def test_hands_hold_cylinder(embodiment, request):
-    """A free cylinder placed in each open hand (gravity off), the fingers close, gravity on: held 1 s."""
-    if embodiment in GRASP_KNOWN_FAILING:
-        request.applymarker(pytest.mark.xfail(strict=True, reason="probe ejected while closing (open issue)"))
+def _peak_speeds(model, data, ctrl, dofs, seconds: float) -> np.ndarray:
+    """Hold ``ctrl`` for ``seconds``; the largest |qvel| of each dof over every physics step."""
+    dofs = np.asarray(dofs)
+    peak = np.zeros(len(dofs))
+    data.ctrl[:] = ctrl
+    for _ in range(math.ceil(seconds / model.opt.timestep)):
+        mujoco.mj_step(model, data)
+        peak = np.maximum(peak, np.abs(data.qvel[dofs]))
+    return peak
+
+
+def _assert_within_speed(model, peak, dofs, v_max) -> None:
+    ratio = np.asarray(peak) / np.asarray(v_max)
+    k = int(np.argmax(ratio))
+    assert ratio[k] <= 1.05, (f"{model.joint(model.dof_jntid[dofs[k]]).name} reached {peak[k]:.2f} rad/s, "
+                              f"real max {v_max[k]:.2f}")
+
+
+def test_step_tracked_within_real_speed(embodiment, scene):
+    """Step commands move each joint no faster than its real maximum speed: first every hand
+    actuator to the far end of its range, then the right elbow 0.6 rad towards the middle of its
+    range (clear of the other arm), which gets there in about the time the real joint needs."""
+    model, layout = scene
+    emb = load_embodiment(embodiment)
+    data = fresh_data(model, layout)
+    ctrl = layout.home_ctrl.copy()
+    dofs, v_max, seconds = [], [], 0.0
+    for s in SIDES:
+        for a in emb.hand.actuators:
+            i = layout.actuator_names.index(f"{s}_{a.name}")
+            lo, hi = model.actuator_ctrlrange[model.actuator(f"{s}_{a.name}").id]
+            far = hi if ctrl[i] - lo < hi - ctrl[i] else lo
+            seconds = max(seconds, abs(far - ctrl[i]) / a.velocity)
+            ctrl[i] = far
+            dofs.append(model.joint(f"{s}_{a.joint}").dofadr[0])
+            v_max.append(a.velocity)
+    _assert_within_speed(model, _peak_speeds(model, data, ctrl, dofs, seconds + 0.3), dofs, v_max)
+    elbow = emb.arm.joints[2]
+    i_elbow = layout.actuator_names.index(layout.sides["right"].arm_actuators[2])
+    elbow_q = model.joint(layout.sides["right"].arm_joints[2])
+    ctrl[i_elbow] += 0.6 * np.sign(sum(elbow.range) / 2 - ctrl[i_elbow])
+    peak = _peak_speeds(model, data, ctrl, [elbow_q.dofadr[0]], 0.6 / elbow.velocity + 0.5)
+    _assert_within_speed(model, peak, [elbow_q.dofadr[0]], [elbow.velocity])
+    assert abs(data.qpos[elbow_q.qposadr[0]] - ctrl[i_elbow]) < 0.01, "the right elbow did not reach its step target"
+
+
+# Probe placements in the hand frame (metres, right hand; mirrored on the left, so each sideways
+# shift is tried both ways): the hand file's, and shifted along the fingers and the cylinder axis.
+PROBE_SHIFTS = ((0.0, 0.0, 0.0), (0.005, 0.0, -0.004), (-0.005, 0.0, 0.004))
+CLOSING_MOVE_MAX_M = 0.04   # a cylinder flicked further while the fingers close was not closed on
+
+
+def _finger_of(emb, side: str) -> dict[str, str]:
+    return {f"{side}_{lk.name}": lk.finger for lk in emb.hand.links if lk.finger}
+
+
+@pytest.mark.parametrize("shift", PROBE_SHIFTS, ids=("declared", "wristward", "fingerward"))
+def test_hands_hold_cylinder(embodiment, shift):
+    """A free cylinder placed in each open hand (gravity off), the fingers close on it without
+    pushing it out, gravity on: at least two fingers hold it for 1 s."""
     model, layout = robot_scene(embodiment, with_probes=True)
     emb = load_embodiment(embodiment)
     probe = emb.hand.grasp_probe
     assert probe is not None, f"{emb.hand.path} has no grasp_probe"
     data = fresh_data(model, layout)
+    for s in SIDES:
+        palm = data.body(layout.sides[s].hand_base)
+        d = np.asarray(shift) if s == "right" else M @ np.asarray(shift)
+        adr = model.joint(f"{s}_probe_free").qposadr[0]
+        data.qpos[adr:adr + 3] += palm.xmat.reshape(3, 3) @ d
+    mujoco.mj_forward(model, data)
     g = model.opt.gravity.copy()
     ctrl = layout.home_ctrl.copy()
     for s in SIDES:
         for a, v in probe.close.items():
             ctrl[layout.actuator_names.index(f"{s}_{a}")] = v
+
+    def in_palm(s):
+        palm = data.body(layout.sides[s].hand_base)
+        return palm.xmat.reshape(3, 3).T @ (data.body(f"{s}_probe").xpos - palm.xpos)
+
+    placed = {s: in_palm(s) for s in SIDES}
     try:
         model.opt.gravity[:] = 0
         for _ in range(60):
             physics.step_control(model, data, ctrl)
-        start = {s: data.body(f"{s}_probe").xpos.copy() for s in SIDES}
-        palm0 = {s: data.body(layout.sides[s].hand_base).xpos.copy() for s in SIDES}
+        closed = {s: in_palm(s) for s in SIDES}
         model.opt.gravity[:] = g
         for _ in range(60):
             physics.step_control(model, data, ctrl)
     finally:
         model.opt.gravity[:] = g
     for s in SIDES:
-        rel0 = start[s] - palm0[s]
-        rel1 = data.body(f"{s}_probe").xpos - data.body(layout.sides[s].hand_base).xpos
-        slip = np.linalg.norm(rel1 - rel0)
-        hand_ids = {model.body(b).id for b in layout.sides[s].hand_bodies}
+        moved = np.linalg.norm(closed[s] - placed[s])
+        assert moved < CLOSING_MOVE_MAX_M, f"{s} hand pushed the cylinder {moved * 1e3:.0f} mm while closing"
+        slip = np.linalg.norm(in_palm(s) - closed[s])
+        finger_of = _finger_of(emb, s)
         pid = model.body(f"{s}_probe").id
-        touching = sum(1 for c in data.contact[: data.ncon]
-                       if {model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]} & hand_ids
-                       and pid in (model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]))
-        assert touching >= 2, f"{s} hand does not hold the cylinder ({touching} contacts)"
+        fingers = set()
+        for c in data.contact[: data.ncon]:
+            b1, b2 = model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]
+            if pid in (b1, b2):
+                fingers.add(finger_of.get(model.body(b2 if b1 == pid else b1).name))
+        fingers.discard(None)
+        assert len(fingers) >= 2, f"{s} hand does not hold the cylinder (fingers touching: {sorted(fingers)})"
         assert slip < 0.02, f"{s} cylinder slipped {slip * 1e3:.1f} mm in 1 s"
 
 
-# the short RM65 (0.61 m reach) covers a smaller part of the workspace around its home pose
-REACH_SCALE = {"rm65": 0.55}
+# wrist offsets from home (right side; x mirrored on the left) and yaw about the fingers
+TARGET_OFFSETS = (((0.0, 0.15, -0.12), 0.0), ((-0.12, 0.3, -0.15), 0.0), ((0.06, 0.05, -0.05), 0.3),
+                  ((-0.05, 0.25, -0.08), -0.25), ((0.08, 0.35, -0.1), 0.0))
 
 
 def _targets(layout, model, data):
-    """Five reachable wrist poses per side: palm-down over the workspace, some tilted."""
-    scale = REACH_SCALE.get(load_embodiment(layout.embodiment).arm.name, 1.0)
-    base = []
-    for dx, dy, dz, tilt in ((0.0, 0.15, -0.12, 0.0), (-0.12, 0.3, -0.15, 0.0), (0.06, 0.05, -0.05, 0.3),
-                             (-0.05, 0.25, -0.08, -0.25), (0.08, 0.35, -0.1, 0.0)):
-        base.append((np.array([dx, dy, dz]), tilt))
+    """Five reachable wrist poses per side: palm-down over the workspace, some yawed, each offset
+    shortened to the arm's declared reach from home (`reach.home_radius_m` of the arm file)."""
+    reach = load_embodiment(layout.embodiment).arm.reach_m
     out = {}
     for s in SIDES:
         p0, R0 = site_pose(model, data, layout.sides[s].wrist_site)
         sign = 1.0 if s == "right" else -1.0
         ts = []
-        for d, tilt in base:
+        for d, tilt in TARGET_OFFSETS:
+            d = np.array([sign * d[0], d[1], d[2]])
+            d *= min(1.0, reach / np.linalg.norm(d))
             Rt = R0 @ quat_to_mat([math.cos(tilt / 2), 0, 0, math.sin(tilt / 2)])   # yaw about the fingers
-            ts.append((p0 + scale * np.array([sign * d[0], d[1], d[2]]), Rt))
+            ts.append((p0 + d, Rt))
         out[s] = ts
     return out
+
+
+def _first_embodiment_per_arm() -> dict[str, str]:
+    out = {}
+    for name in embodiment_names():
+        out.setdefault(load_embodiment(name).arm.name, name)
+    return out
+
+
+@pytest.mark.parametrize("arm,embodiment_name", sorted(_first_embodiment_per_arm().items()))
+def test_declared_reach_is_within_the_measured_reach(arm, embodiment_name):
+    """The arm file's reach holds straight ahead and ahead-and-down of home (the full measurement,
+    every direction over the table, is `python -m sim.embodiment.reach`)."""
+    emb = load_embodiment(embodiment_name)
+    kin = ArmKinematics(emb.arm, emb.mounts["right"], emb.hand, "right")
+    q_home = np.array(home_arm_angles(embodiment_name)[1])
+    p0, q0 = kin.fk(q_home)
+    for d in ((0.0, 1.0, 0.0), (0.0, 0.7071, -0.7071)):
+        r = reach_along(kin, q_home, p0, quat_to_mat(q0), np.array(d), 0.01)
+        assert r >= emb.arm.reach_m, f"{arm}: reaches {r:.2f} m towards {d}, file declares {emb.arm.reach_m}"
 
 
 def test_ik_reaches_and_mujoco_tracks(embodiment, scene):
@@ -254,3 +378,42 @@ def test_cameras_render(embodiment, scene):
             img = renderer.render()
             assert img.shape == (48, 64, 3)
             assert img.std() > 1.0, f"camera {cam} renders a constant image"
+
+
+@pytest.mark.skipif(os.environ.get("MUJOCO_GL") not in ("egl", "osmesa"), reason="needs MUJOCO_GL=egl|osmesa")
+def test_camera_intrinsics_match_the_render(embodiment, scene):
+    """The stored pinhole intrinsics (sim.render.intrinsic_matrix) and extrinsics are the cameras'
+    calibration: a ray cast (mj_ray) through a pixel's centre with them hits the geom the camera
+    renders there, at the depth it renders."""
+    model, layout = scene
+    data = fresh_data(model, layout)
+    width, height = 64, 48
+    hit = np.array([-1], dtype=np.int32)
+    with mujoco.Renderer(model, height, width) as renderer:
+        for cam in CAMERA_NAMES:
+            cid = model.camera(cam).id
+            renderer.enable_depth_rendering()
+            renderer.update_scene(data, camera=cam)
+            depth = renderer.render().copy()
+            renderer.disable_depth_rendering()
+            renderer.enable_segmentation_rendering()
+            renderer.update_scene(data, camera=cam)
+            seg = renderer.render().copy()
+            renderer.disable_segmentation_rendering()
+            K_inv = np.linalg.inv(intrinsic_matrix(float(model.cam_fovy[cid]), width, height))
+            world_from_cam = data.cam_xmat[cid].reshape(3, 3) @ MJ_TO_CV
+            rays = agree = 0
+            errors = []
+            for v in range(1, height, 4):
+                for u in range(1, width, 4):
+                    d = world_from_cam @ (K_inv @ np.array([u + 0.5, v + 0.5, 1.0]))   # unit optical depth
+                    t = mujoco.mj_ray(model, data, data.cam_xpos[cid], d / np.linalg.norm(d), None, 1, -1, hit)
+                    if t < 0:
+                        continue
+                    rays += 1
+                    if seg[v, u, 0] == hit[0]:
+                        agree += 1
+                        z = t / np.linalg.norm(d)
+                        errors.append(abs(z - depth[v, u]) / z)
+            assert rays > 50 and agree > 0.85 * rays, f"{cam}: {agree} of {rays} rays hit the rendered geom"
+            assert np.median(errors) < 1e-3, f"{cam}: rays and render disagree on depth by {np.median(errors):.2%}"
