@@ -1,4 +1,5 @@
-"""`b2d tasks show <task>`: one task's stage graph (stages, their predicates, dependencies, terminal)."""
+"""`b2d tasks show <task>`: one task's stage graph (stages, predicates, dependencies, terminal).
+`b2d tasks check [task...]`: can the arms reach every target of the layout."""
 
 from __future__ import annotations
 
@@ -62,3 +63,41 @@ def show(task: str, as_json: bool) -> None:
     terminal = graph["terminal"]
     for item in terminal["all"] if isinstance(terminal, dict) and list(terminal) == ["all"] else [terminal]:
         click.echo(f"    {_flow(item)}")
+
+
+@tasks.command("check")
+@click.argument("task", nargs=-1)
+@click.option("--embodiment", default=None, help="Embodiment to check on (default: each task's paper embodiment).")
+@click.option("--json", "as_json", is_flag=True, help="Print the reach report as JSON.")
+def check(task: tuple[str, ...], embodiment: str | None, as_json: bool) -> None:
+    """Can the arms reach every target of a task's layout (objects, links, points, zones)?
+    Checks all 26 tasks when none is named; exits 1 when a target is out of reach."""
+    from sim.scene.builder import build_scene
+    from sim.scene.reach import check_reach
+    from sim.scene.sample import nominal_sample
+    from sim.tasks import load_task
+
+    names = list(task) or registry.names("tasks")
+    for name in names:
+        registry.validate_name("task", name)
+    if embodiment:
+        registry.validate_name("embodiment", embodiment)
+    report, missed = [], 0
+    for name in names:
+        spec = load_task(name)
+        emb = embodiment or spec.paper_embodiment
+        reaches = check_reach(build_scene(spec, emb, nominal_sample(spec)))
+        rows = [{"target": r.target.name, "arms": list(r.sides), "best_error_m": round(r.pos_err_m, 4)}
+                for r in reaches]
+        missed += sum(not r.reachable for r in reaches)
+        report.append({"task": name, "embodiment": emb, "targets": rows})
+    if as_json:
+        click.echo(json.dumps(report, indent=2))
+    else:
+        for entry in report:
+            out = [r for r in entry["targets"] if not r["arms"]]
+            status = "all reachable" if not out else f"{len(out)} out of reach"
+            click.echo(f"{entry['task']} on {entry['embodiment']}: {len(entry['targets'])} targets, {status}")
+            for r in out:
+                click.echo(f"    {r['target']}: best miss {1000 * r['best_error_m']:.1f} mm")
+    raise SystemExit(1 if missed else 0)

@@ -1,9 +1,10 @@
 """Task descriptions loaded from `sim/catalog/tasks/<name>.yaml`.
 
-A task declares its table, its objects (primitives and generated shapes built by b2d, fixed or free,
-with articulated links), where they start (a pose or a placement zone), an optional scripted
-demonstration plan and its `metrics` block, which the shared evaluator compiles at load time. No
-task needs Python of its own.
+A task declares its table, its objects (primitives and generated shapes built by b2d, or mesh
+files; fixed or free, with articulated links), where they start (a pose or a placement zone), an
+optional scripted demonstration plan and its `metrics` block, which the shared evaluator compiles
+at load time. No task needs Python of its own. Masses, frictions and densities are range-checked
+(`sim.scene.fields`).
 """
 
 from __future__ import annotations
@@ -19,27 +20,24 @@ from evaluation import EpisodeEvaluator, TaskContext, TaskSpecError
 from evaluation.state import ObjectInfo
 from sim.registry import catalog_path, load_yaml, names
 from sim.scene.articulated import LinkSpec, parse_links
-from sim.scene.parts import Part, num_list, parse_parts, parts_aabb
+from sim.scene.fields import (DENSITY_RANGE_KG_M3, FRICTION_RANGE, MASS_RANGE_KG, ROLLING_FRICTION_RANGE_M,
+                              num_list, number)
+from sim.scene.parts import Cavity, Part, parse_part, parse_parts, parts_aabb
 
 DEFAULT_TABLE_HEIGHT = 0.75
-OBJECT_KEYS = ("shape", "size", "parts", "mass", "friction", "rolling_friction", "rgba", "pose", "zone",
-               "fixed_pose", "container", "base", "links", "key_rows", "mouth_axis", "tool")
+DEFAULT_MASS_KG = 0.1
+OBJECT_KEYS = ("shape", "size", "parts", "mesh", "mass", "density", "friction", "rolling_friction", "rgba", "pose",
+               "zone", "fixed_pose", "container", "base", "links", "key_rows", "mouth_axis")
+GEOMETRY_KEYS = ("shape", "parts", "mesh")     # exactly one ("size" goes with "shape")
 BASES = ("free", "fixed")          # fixed: the base is part of the world (fridge, toilet, piano)
 CENTRE_TOLERANCE_M = 0.005
-
-
-@dataclass(frozen=True)
-class ToolSpec:
-    """Tool annotation: what the tool is for and its functional point (hammer head, ladle bowl)."""
-    role: str
-    point: tuple[float, float, float]     # object frame
+TABLE_HEIGHT_RANGE_M = (0.4, 1.2)
+TABLE_THICKNESS_RANGE_M = (0.01, 0.2)
 
 
 @dataclass(frozen=True)
 class ObjectSpec:
     name: str
-    shape: str                    # box | cylinder | sphere | ellipsoid | capsule, or "compound" (parts)
-    size: tuple[float, ...]       # MuJoCo geom size convention for the shape; () when compound
     mass: float
     friction: float
     rgba: tuple[float, float, float, float]
@@ -54,7 +52,6 @@ class ObjectSpec:
     links: tuple[LinkSpec, ...] = ()      # articulated links (joints "<name>/<link>")
     base: str = "free"
     mouth_axis: tuple[float, float, float] | None = None   # pourers: local axis of the mouth
-    tool: ToolSpec | None = None
     on: str | None = None                 # pose.support: starts on this object, xy/yaw in its frame
 
     @property
@@ -122,21 +119,35 @@ class TaskSpec:
         return [j for o in self.objects.values() for j in o.joint_names]
 
 
-def _non_negative(path: Path, field: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:
-        raise SpecError(path, field, "a non-negative number", value)
-    return float(value)
-
-
-def _geometry(path, where, raw) -> tuple[str, tuple, tuple[Part, ...], object]:
-    """shape + size (one primitive) or parts (primitives and generated shapes)."""
-    if ("parts" in raw) == ("shape" in raw or "size" in raw):
-        raise SpecError(path, where, "either 'shape' and 'size' (one primitive) or 'parts'")
+def _geometry(path, where, raw) -> tuple[tuple[Part, ...], Cavity | None]:
+    """shape + size (one primitive), mesh (one mesh file) or parts (primitives, generated shapes
+    and meshes)."""
+    given = [k for k in GEOMETRY_KEYS if k in raw]
+    if len(given) != 1 or ("size" in raw) != ("shape" in raw):
+        raise SpecError(path, where, "exactly one of 'shape' with 'size' (one primitive), 'mesh' (a mesh file) "
+                        "or 'parts'", sorted(k for k in raw if k in (*GEOMETRY_KEYS, "size")))
     if "parts" in raw:
-        parts, cavity = parse_parts(path, f"{where}.parts", raw["parts"])
-        return "compound", (), parts, cavity
-    (part,), _ = parse_parts(path, where, [{"shape": raw.get("shape"), "size": raw.get("size")}])
-    return part.shape, part.size, (part,), None
+        return parse_parts(path, f"{where}.parts", raw["parts"])
+    if "mesh" in raw:
+        parts, _ = parse_part(path, where, {"mesh": raw["mesh"]})
+        return tuple(parts), None
+    parts, _ = parse_part(path, where, {"shape": raw["shape"], "size": raw["size"]})
+    return tuple(parts), None
+
+
+def _mass(path, where, raw, parts) -> float:
+    """The declared mass, or the density times the parts' volume (a mesh part: its hull's)."""
+    if "mass" in raw and "density" in raw:
+        raise SpecError(path, where, "one of 'mass' (kg) or 'density' (kg/m^3), not both")
+    if "density" in raw:
+        density = number(path, f"{where}.density", raw["density"], *DENSITY_RANGE_KG_M3, unit="kg/m^3")
+        mass = density * sum(p.volume for p in parts)
+        low, high = MASS_RANGE_KG
+        if not low <= mass <= high:
+            raise SpecError(path, f"{where}.density", f"a density giving a mass in [{low}, {high}] kg "
+                            f"(this one gives {mass:.4g} kg)", raw["density"])
+        return float(mass)
+    return number(path, f"{where}.mass", raw.get("mass", DEFAULT_MASS_KG), *MASS_RANGE_KG, unit="kg")
 
 
 def _parse_object(path, name, raw, zones, earlier) -> ObjectSpec:
@@ -146,7 +157,7 @@ def _parse_object(path, name, raw, zones, earlier) -> ObjectSpec:
     for key in raw:
         if key not in OBJECT_KEYS:
             raise SpecError(path, f"{where}.{key}", f"an object key {list(OBJECT_KEYS)}")
-    shape, size, parts, cavity = _geometry(path, where, raw)
+    parts, cavity = _geometry(path, where, raw)
     lo, hi = parts_aabb(parts)
     if np.abs((lo + hi) / 2).max() > CENTRE_TOLERANCE_M:
         raise SpecError(path, f"{where}.parts", "parts centred on the object frame (the evaluator's box "
@@ -166,6 +177,8 @@ def _parse_object(path, name, raw, zones, earlier) -> ObjectSpec:
     on = (pose or {}).get("support")      # starts standing on this object ("on" is a YAML boolean)
     if on is not None and on not in earlier:
         raise SpecError(path, f"{where}.pose.support", f"an object declared before {name!r}: {sorted(earlier)}", on)
+    if not isinstance(raw.get("fixed_pose", False), bool):
+        raise SpecError(path, f"{where}.fixed_pose", "true or false", raw["fixed_pose"])
     base = raw.get("base", "free")
     if base not in BASES:
         raise SpecError(path, f"{where}.base", f"one of {list(BASES)}", base)
@@ -179,39 +192,37 @@ def _parse_object(path, name, raw, zones, earlier) -> ObjectSpec:
         interior, offset = cavity.half_extents, cavity.offset
     else:
         interior = offset = None
-    tool = raw.get("tool")
-    if tool is not None:
-        if not isinstance(tool, dict) or not isinstance(tool.get("role"), str):
-            raise SpecError(path, f"{where}.tool", "a mapping {role: text, point: [x, y, z]}", tool)
-        tool = ToolSpec(tool["role"], num_list(path, f"{where}.tool.point", tool.get("point"), 3))
-    mass = _non_negative(path, f"{where}.mass", raw.get("mass", 0.1))
-    if mass <= 0:
-        raise SpecError(path, f"{where}.mass", "a positive mass (kg)", mass)
     return ObjectSpec(
         name=name,
-        shape=shape,
-        size=size,
-        mass=mass,
-        friction=_non_negative(path, f"{where}.friction", raw.get("friction", 1.0)),
+        mass=_mass(path, where, raw, parts),
+        friction=number(path, f"{where}.friction", raw.get("friction", 1.0), *FRICTION_RANGE),
         rgba=num_list(path, f"{where}.rgba", raw.get("rgba", [0.7, 0.7, 0.7, 1.0]), 4),
         xy=xy,
-        yaw_deg=float((pose or {}).get("yaw_deg", 0.0)),
+        yaw_deg=number(path, f"{where}.pose.yaw_deg", (pose or {}).get("yaw_deg", 0.0), unit="degrees"),
         zone=zone,
-        fixed_pose=bool(raw.get("fixed_pose", False)),
-        rolling_friction=_non_negative(path, f"{where}.rolling_friction", raw.get("rolling_friction", 0.0)),
+        fixed_pose=raw.get("fixed_pose", False),
+        rolling_friction=number(path, f"{where}.rolling_friction", raw.get("rolling_friction", 0.0),
+                                *ROLLING_FRICTION_RANGE_M, unit="m"),
         interior_half_extents=interior,
         interior_offset=offset,
         parts=parts,
         links=parse_links(path, where, raw),
         base=base,
         mouth_axis=num_list(path, f"{where}.mouth_axis", raw["mouth_axis"], 3) if "mouth_axis" in raw else None,
-        tool=tool,
         on=on,
     )
 
 
+def _mapping(path, field: str, value, what: str) -> dict:
+    """An optional top-level block: absent is empty, anything but a mapping is an error."""
+    value = {} if value is None else value
+    if not isinstance(value, dict):
+        raise SpecError(path, field, what, value)
+    return value
+
+
 def _parse_zones(path, raw) -> dict[str, dict]:
-    zones = raw.get("zones") or {}
+    zones = _mapping(path, "zones", raw.get("zones"), "a mapping of zone name -> zone")
     for name, zone in zones.items():
         ok = isinstance(zone, dict) and (set(zone) == {"xy_min", "xy_max"} or set(zone) == {"center_xy", "radius"})
         if not ok:
@@ -219,14 +230,16 @@ def _parse_zones(path, raw) -> dict[str, dict]:
                             zone)
         for key, value in zone.items():
             if key == "radius":
-                _non_negative(path, f"zones.{name}.radius", value)
+                number(path, f"zones.{name}.radius", value, 0.0, low_open=True, unit="m")
             else:
                 num_list(path, f"zones.{name}.{key}", value, 2)
+        if "xy_min" in zone and not all(a < b for a, b in zip(zone["xy_min"], zone["xy_max"])):
+            raise SpecError(path, f"zones.{name}", "xy_min below xy_max on both axes", zone)
     return zones
 
 
 def _parse_points(path, raw) -> dict[str, list]:
-    points = raw.get("points") or {}
+    points = _mapping(path, "points", raw.get("points"), "a mapping of point name -> [x, y, z]")
     for name, p in points.items():
         num_list(path, f"points.{name}", p, 3)
     return points
@@ -234,7 +247,11 @@ def _parse_points(path, raw) -> dict[str, list]:
 
 def _parse_plan(path, raw, objects) -> list[dict]:
     plan = raw.get("demo_plan") or []
+    if not isinstance(plan, list):
+        raise SpecError(path, "demo_plan", "a list of steps {hand, pick, place}", plan)
     for i, step in enumerate(plan):
+        if not isinstance(step, dict):
+            raise SpecError(path, f"demo_plan[{i}]", "a mapping {hand, pick, place}", step)
         for key in ("hand", "pick", "place"):
             if key not in step:
                 raise SpecError(path, f"demo_plan[{i}].{key}", "a value")
@@ -271,7 +288,7 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
     objects: dict[str, ObjectSpec] = {}
     for n, o in raw["objects"].items():
         objects[n] = _parse_object(path, n, o, zones, dict(objects))
-    table = raw.get("table") or {}
+    table = _mapping(path, "table", raw.get("table"), "a mapping {height, size_xy, thickness, friction}")
     embodiment = raw.get("paper_embodiment", "")
     if embodiment and embodiment not in names("embodiments"):
         raise SpecError(path, "paper_embodiment", f"an embodiment from {names('embodiments')}", embodiment)
@@ -282,10 +299,12 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
         success_condition=raw.get("success_condition", ""),
         paper_embodiment=embodiment,
         table=TableSpec(
-            height=float(table.get("height", DEFAULT_TABLE_HEIGHT)),
-            size_xy=num_list(path, "table.size_xy", table.get("size_xy", [1.2, 0.8]), 2),
-            thickness=float(table.get("thickness", 0.04)),
-            friction=float(table.get("friction", 0.8)),
+            height=number(path, "table.height", table.get("height", DEFAULT_TABLE_HEIGHT), *TABLE_HEIGHT_RANGE_M,
+                          unit="m"),
+            size_xy=num_list(path, "table.size_xy", table.get("size_xy", [1.2, 0.8]), 2, positive=True),
+            thickness=number(path, "table.thickness", table.get("thickness", 0.04), *TABLE_THICKNESS_RANGE_M,
+                             unit="m"),
+            friction=number(path, "table.friction", table.get("friction", 0.8), *FRICTION_RANGE),
         ),
         objects=objects,
         zones=zones,

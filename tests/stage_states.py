@@ -12,13 +12,20 @@ A state (see task_stage_states.yaml) moves free objects and sets articulated joi
 Orientation is `euler_deg` in the world (default: upright, yaw 0). Objects not named keep their
 place. Stateful predicates get a list of states, evaluated in order; the value after the last counts.
 `{press: piano/C3, depth: -0.009}` is shorthand for two states: the key down, then back at 0.
+
+Whole episodes (task_terminal_states.yaml) are state lists run through the task's evaluator; there
+`{sat_of: stage}` stands for that stage's satisfying states and `{replay: done}` for the task's
+`done` list.
 """
 
 from __future__ import annotations
 
+import math
+
 import mujoco
 import numpy as np
 
+from evaluation import EpisodeEvaluator, EpisodeRecord
 from evaluation.predicates import compile_condition
 from evaluation.step import EvalStep
 from sim import physics
@@ -60,11 +67,17 @@ def apply_state(scene: Scene, observer: SceneObserver, data: mujoco.MjData, stat
     mujoco.mj_forward(scene.model, data)
 
 
-def expand(states) -> list[dict]:
+def expand(states, stage_states: dict | None = None, episodes: dict | None = None) -> list[dict]:
+    """Plain states from the shorthands: press, sat_of (a stage's satisfying states, from
+    `stage_states`) and replay (another state list of the task, from `episodes`)."""
     states = [states] if isinstance(states, dict) else list(states)
     out = []
     for state in states:
-        if "press" in state:
+        if "sat_of" in state:
+            out += expand(stage_states[state["sat_of"]]["sat"], stage_states, episodes)
+        elif "replay" in state:
+            out += expand(episodes[state["replay"]], stage_states, episodes)
+        elif "press" in state:
             out += [{"joints": {state["press"]: state["depth"]}}, {"joints": {state["press"]: 0.0}}]
         else:
             out.append(state)
@@ -85,3 +98,21 @@ def stage_value(scene: Scene, stage: dict, states) -> bool:
         data.time = (k + 1) * physics.CONTROL_DT
         value = bool(cond(EvalStep(observer.state(data), observer.context, initial, physics.CONTROL_DT, {}, {})))
     return value
+
+
+def episode_record(scene: Scene, states, stage_states: dict, episodes: dict) -> EpisodeRecord:
+    """Run the task's own evaluator over an episode made of placed states: the scene as built, then
+    each state for one control step, then the last state held for the dwell time and one step more
+    (a terminal predicate that holds there reaches stable success)."""
+    observer = SceneObserver(scene)
+    evaluator = EpisodeEvaluator(scene.task.metrics, observer.context, source=str(scene.task.source))
+    data = scene.home_data()
+    dt = physics.CONTROL_DT
+    sequence = expand(states, stage_states, episodes)
+    hold = math.ceil(evaluator.dwell.dwell_s / dt) + 1
+    for k in range(1 + len(sequence) + hold):
+        if 1 <= k <= len(sequence):
+            apply_state(scene, observer, data, sequence[k - 1])
+        data.time = k * dt
+        evaluator.update(observer.state(data), dt)
+    return evaluator.result()

@@ -1,5 +1,6 @@
 """The 26 paper tasks: each builds on its paper embodiment and on another, settles for 1 s without
-anything falling through, and each stage predicate holds in a placed state and fails in another."""
+anything falling through, each stage predicate holds in a placed state and fails in another, and
+each terminal predicate reaches stable success when every stage is done and not on a near miss."""
 
 from functools import lru_cache
 from pathlib import Path
@@ -8,7 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 import yaml
-from stage_states import stage_value
+from stage_states import episode_record, stage_value
 from task_scenes import settle
 
 from sim.embodiment import embodiment_names
@@ -20,6 +21,7 @@ from sim.tasks import load_task
 from tactile.targets import geom_mesh, target_geoms
 
 STATES = yaml.safe_load((Path(__file__).parent / "task_stage_states.yaml").read_text())
+EPISODES = yaml.safe_load((Path(__file__).parent / "task_terminal_states.yaml").read_text())
 PENETRATION_TOLERANCE_M = 0.003   # deepest contact of an object with the table or another object
 DROP_TOLERANCE_M = 0.01      # any object's fall while settling
 DRIFT_TOLERANCE_M = 0.03     # any object's slide while settling
@@ -86,6 +88,24 @@ def test_stage_predicates_hold_and_fail_in_placed_states(task):
         states = STATES[task][stage["id"]]
         assert stage_value(scene, stage, states["sat"]), f"{stage['id']}: satisfying state does not hold"
         assert not stage_value(scene, stage, states["viol"]), f"{stage['id']}: violating state holds"
+
+
+@pytest.mark.parametrize("task", names("tasks"))
+def test_terminal_predicate_is_reached_when_done_and_not_on_a_near_miss(task):
+    """Through the task's own evaluator: all stages done and held for the dwell is stable success
+    with every stage latched; the near miss never succeeds and fails at its last step."""
+    scene = _scene(task)
+    episodes = EPISODES[task]
+    assert sorted(episodes) == ["done", "undone"]
+    done = episode_record(scene, episodes["done"], STATES[task], episodes)
+    assert done.success and done.success_final, f"{task}: the done state does not reach stable success"
+    assert all(done.stage_latched), dict(zip(done.stage_ids, done.stage_latched))
+    undone = episode_record(scene, episodes["undone"], STATES[task], episodes)
+    assert not undone.success and not undone.success_final, f"{task}: the near miss succeeds"
+
+
+def test_every_task_has_terminal_episodes():
+    assert sorted(EPISODES) == names("tasks")
 
 
 def _body_mesh_bounds(model, geoms) -> np.ndarray:

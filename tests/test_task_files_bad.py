@@ -88,3 +88,38 @@ def test_parts_must_be_centred_on_the_object_frame(tmp_path):
 def test_bad_geometry_and_joints(tmp_path, mutate, field, expected):
     err = _load(tmp_path, mutate)
     assert err.field == field and expected in err.expected
+
+
+@pytest.mark.parametrize("mutate,field,expected", [
+    (lambda r: r["objects"]["paper"].update(mass=0), "objects.paper.mass", "a number in [0.001, 100.0] kg"),
+    (lambda r: r["objects"]["paper"].update(mass=-0.2), "objects.paper.mass", "a number in [0.001, 100.0] kg"),
+    (lambda r: r["objects"]["paper"].update(mass=250.0), "objects.paper.mass", "a number in [0.001, 100.0] kg"),
+    (lambda r: r["objects"]["paper"].update(mass="light"), "objects.paper.mass", "a number in"),
+    (lambda r: r["objects"]["paper"].update(mass=float("nan")), "objects.paper.mass", "a number in"),
+    (lambda r: r["objects"]["paper"].update(friction=0), "objects.paper.friction", "a number in [0.05, 2.0]"),
+    (lambda r: r["objects"]["paper"].update(friction=-1.0), "objects.paper.friction", "a number in [0.05, 2.0]"),
+    (lambda r: r["objects"]["paper"].update(friction=8.0), "objects.paper.friction", "a number in [0.05, 2.0]"),
+    (lambda r: r["objects"]["paper"].update(rolling_friction=0.5), "objects.paper.rolling_friction",
+     "a number in [0.0, 0.01] m"),
+    (lambda r: (r["objects"]["paper"].pop("mass"), r["objects"]["paper"].update(density=2.0)),
+     "objects.paper.density", "a number in [10.0, 25000.0] kg/m^3"),
+    (lambda r: r["objects"]["trash_can"]["links"]["lid"].update(mass=0), "objects.trash_can.links.lid.mass",
+     "a number in [0.001, 100.0] kg"),
+    (lambda r: r["table"].update(friction=0.0), "table.friction", "a number in [0.05, 2.0]"),
+    (lambda r: r["table"].update(height=3.0), "table.height", "a number in [0.4, 1.2] m"),
+])
+def test_mass_and_friction_are_range_checked(tmp_path, mutate, field, expected):
+    err = _load(tmp_path, mutate)
+    assert err.field == field and expected in err.expected, str(err)
+
+
+def test_density_gives_the_mass_and_excludes_a_declared_mass(tmp_path):
+    raw = copy.deepcopy(BASE)
+    del raw["objects"]["paper"]["mass"]
+    raw["objects"]["paper"]["density"] = 100.0
+    path = tmp_path / "density.yaml"
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
+    paper = parse_task(load_yaml(path), path).objects["paper"]
+    assert paper.mass == pytest.approx(100.0 * sum(p.volume for p in paper.parts))
+    err = _load(tmp_path, lambda r: r["objects"]["paper"].update(density=100.0))
+    assert err.field == "objects.paper" and "not both" in err.expected

@@ -26,3 +26,14 @@ def test_tasks_show_unknown_task_lists_the_valid_ones():
 def test_list_tasks_shows_the_26_with_stages():
     rows = json.loads(CliRunner().invoke(cli, ["list", "tasks", "--json"]).output)
     assert len(rows) == 26 and all(r["stages"] for r in rows)
+
+
+def test_tasks_check_reports_reach_and_rejects_unknown_names():
+    result = CliRunner().invoke(cli, ["tasks", "check", "citrus_plate_loading", "--json"])
+    assert result.exit_code == 0, result.output
+    (entry,) = json.loads(result.output)
+    assert entry["embodiment"] == "ur5_rh5dg2"
+    assert {r["target"] for r in entry["targets"]} >= {"object lemon_1", "object orange_2"}
+    assert all(r["arms"] for r in entry["targets"])
+    result = CliRunner().invoke(cli, ["tasks", "check", "citrus_plate_loading", "--embodiment", "nope"])
+    assert result.exit_code == 2 and "valid embodiment names" in result.output

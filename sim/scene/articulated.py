@@ -31,7 +31,9 @@ import mujoco
 import numpy as np
 
 from sim.errors import SpecError
-from sim.scene.parts import GEOM_TYPES, Part, euler_quat, num_list, pad_size, parse_parts, part_masses
+from sim.scene.fields import MASS_RANGE_KG, num_list, number
+from sim.scene.geoms import add_part_geoms
+from sim.scene.parts import Part, euler_quat, parse_parts
 
 JOINT_TYPES = {"hinge": mujoco.mjtJoint.mjJNT_HINGE, "slide": mujoco.mjtJoint.mjJNT_SLIDE}
 JOINT_KEYS = ("type", "axis", "range", "damping", "stiffness", "springref", "frictionloss", "armature", "initial")
@@ -65,13 +67,6 @@ class LinkSpec:
     rgba: tuple[float, float, float, float] | None
 
 
-def _number(path, field, raw, key, default, lo=0.0):
-    value = raw.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or (lo is not None and value < lo):
-        raise SpecError(path, f"{field}.{key}", "a number" + (f" >= {lo}" if lo is not None else ""), value)
-    return float(value)
-
-
 def parse_joint(path, field: str, raw) -> JointSpec:
     if not isinstance(raw, dict):
         raise SpecError(path, field, f"a mapping with keys {list(JOINT_KEYS)}", raw)
@@ -87,15 +82,17 @@ def parse_joint(path, field: str, raw) -> JointSpec:
     lo, hi = num_list(path, f"{field}.range", raw.get("range"), 2)
     if not lo < hi:
         raise SpecError(path, f"{field}.range", "[low, high] with low < high", raw.get("range"))
-    initial = _number(path, field, raw, "initial", 0.0, lo=None)
+
+    def value(key: str, default: float, low: float | None = 0.0) -> float:
+        return number(path, f"{field}.{key}", raw.get(key, default), low)
+
+    initial = value("initial", 0.0, low=None)
     if not lo <= initial <= hi:
         raise SpecError(path, f"{field}.initial", f"a value within the range [{lo}, {hi}]", initial)
     return JointSpec(
         type=kind, axis=tuple((axis / np.linalg.norm(axis)).tolist()), range=(lo, hi),
-        damping=_number(path, field, raw, "damping", 0.1), stiffness=_number(path, field, raw, "stiffness", 0.0),
-        springref=_number(path, field, raw, "springref", 0.0, lo=None),
-        frictionloss=_number(path, field, raw, "frictionloss", 0.0),
-        armature=_number(path, field, raw, "armature", DEFAULT_ARMATURE), initial=initial)
+        damping=value("damping", 0.1), stiffness=value("stiffness", 0.0), springref=value("springref", 0.0, low=None),
+        frictionloss=value("frictionloss", 0.0), armature=value("armature", DEFAULT_ARMATURE), initial=initial)
 
 
 def _link(path, field, name, raw, pos, keys) -> LinkSpec:
@@ -105,9 +102,7 @@ def _link(path, field, name, raw, pos, keys) -> LinkSpec:
     if "joint" not in raw:
         raise SpecError(path, f"{field}.joint", "a joint {type, axis, range, ...}")
     parts, _ = parse_parts(path, f"{field}.parts", raw.get("parts"))
-    mass = _number(path, field, raw, "mass", None) if "mass" in raw else None
-    if mass is None or mass <= 0:
-        raise SpecError(path, f"{field}.mass", "a positive mass (kg)", raw.get("mass"))
+    mass = number(path, f"{field}.mass", raw.get("mass"), *MASS_RANGE_KG, unit="kg")
     return LinkSpec(name=name, pos=pos, quat=euler_quat(num_list(path, f"{field}.euler_deg",
                                                                  raw.get("euler_deg", [0, 0, 0]), 3)),
                     joint=parse_joint(path, f"{field}.joint", raw["joint"]), parts=parts, mass=mass,
@@ -167,9 +162,6 @@ def add_links(spec: mujoco.MjSpec, body: mujoco.MjsBody, object_name: str, links
                         stiffness=j.stiffness, springref=j.springref * scale, frictionloss=j.frictionloss,
                         armature=j.armature, solref_limit=LIMIT_SOLREF)
         spec.add_exclude(bodyname1=object_name, bodyname2=name)
-        for k, (part, mass) in enumerate(zip(link.parts, part_masses(link.parts, link.mass))):
-            colour = part.rgba or link.rgba or rgba
-            child.add_geom(name=f"{name}/{k}", type=GEOM_TYPES[part.shape], size=pad_size(part.size),
-                           pos=list(part.pos), quat=list(part.quat), mass=mass, rgba=list(colour),
-                           friction=[friction, 0.01, 0.0], **contact)
+        add_part_geoms(spec, child, [f"{name}/{k}" for k in range(len(link.parts))], link.parts, link.mass,
+                       [friction, 0.01, 0.0], link.rgba or rgba, contact)
 

@@ -1,6 +1,6 @@
 """Task objects as MuJoCo bodies: a base body (free, or fixed in the world) carrying the object's
-primitive parts, plus its articulated links. The tactile layer ray-casts against these geoms
-(`tactile.targets`).
+parts (primitives and mesh hulls), plus its articulated links. The tactile layer ray-casts against
+these geoms (`tactile.targets`).
 """
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ import mujoco
 import numpy as np
 
 from sim.scene.articulated import add_links
-from sim.scene.parts import GEOM_TYPES, pad_size, part_masses
+from sim.scene.geoms import add_part_geoms
+from sim.scene.parts import Part
 
 if TYPE_CHECKING:
     from sim.tasks import ObjectSpec
@@ -34,21 +35,17 @@ def add_free_object(spec: mujoco.MjSpec, name: str, shape: str, size, mass: floa
     """A one-primitive free body (distractors)."""
     body = spec.worldbody.add_body(name=name, pos=list(pos), quat=list(quat))
     body.add_freejoint(name=f"{name}_free")
-    body.add_geom(name=name, type=GEOM_TYPES[shape], size=pad_size(size), mass=mass,
-                  friction=[friction, 0.01, rolling_friction], rgba=list(rgba), **_contact(rolling_friction))
+    add_part_geoms(spec, body, [name], (Part(shape, tuple(size)),), mass, [friction, 0.01, rolling_friction], rgba,
+                   _contact(rolling_friction))
 
 
 def add_task_object(spec: mujoco.MjSpec, obj: ObjectSpec, pos, quat) -> None:
-    """The object's body at pos/quat: a free joint unless its base is fixed, one geom per part
-    (mass shared by volume) and its links. A one-part object's geom carries the object's name."""
+    """The object's body at pos/quat: a free joint unless its base is fixed, one geom per part and
+    its links. A one-part object's geom carries the object's name."""
     body = spec.worldbody.add_body(name=obj.name, pos=list(pos), quat=list(quat))
     if obj.base == "free":
         body.add_freejoint(name=f"{obj.name}_free")
-    contact = _contact(obj.rolling_friction)
-    single = len(obj.parts) == 1
-    for k, (part, mass) in enumerate(zip(obj.parts, part_masses(obj.parts, obj.mass))):
-        body.add_geom(name=obj.name if single else f"{obj.name}/{k}", type=GEOM_TYPES[part.shape],
-                      size=pad_size(part.size), pos=list(part.pos), quat=list(part.quat), mass=mass,
-                      friction=[obj.friction, 0.01, obj.rolling_friction], rgba=list(part.rgba or obj.rgba),
-                      **contact)
+    names = [obj.name] if len(obj.parts) == 1 else [f"{obj.name}/{k}" for k in range(len(obj.parts))]
+    add_part_geoms(spec, body, names, obj.parts, obj.mass, [obj.friction, 0.01, obj.rolling_friction], obj.rgba,
+                   _contact(obj.rolling_friction))
     add_links(spec, body, obj.name, obj.links, obj.friction, obj.rgba, {"condim": 4, "solref": OBJECT_SOLREF})

@@ -1,32 +1,37 @@
-"""Object geometry as primitive parts, and the generated shapes built from them.
+"""Object geometry as parts, and the generated shapes built from them.
 
-A task object (or one link of an articulated object) is a list of parts: MuJoCo primitives placed
-in the object's frame. Physics collides the primitives; the tactile layer ray-casts against the
-same compiled geoms (`tactile.targets`). Generated shapes expand into primitives:
+A task object (or one link of an articulated object) is a list of parts placed in the object's
+frame: MuJoCo primitives, or the convex hull of a mesh file. Physics collides the parts; the
+tactile layer ray-casts against the same compiled geoms (`tactile.targets`). Generated shapes
+expand into primitives:
 
     {shape: box, size: [hx, hy, hz], pos: [x, y, z], euler_deg: [rx, ry, rz], rgba: [...]}
     {open_box: {size: [hx, hy, hz], wall: 0.01, open: +z}}      # tray, crate, cabinet (open: -y)
     {open_cylinder: {size: [r, hz], wall: 0.006, segments: 16}}  # cup, bowl, pot, can
+    {mesh: {file: mug.obj, scale: 0.001}}                         # a mesh file's convex hull (mesh_files)
 Sizes are MuJoCo half sizes. Generated shapes also know their cavity (the `inside` predicate's box).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
 from sim.errors import SpecError
+from sim.scene.fields import num_list, number
+from sim.scene.mesh_files import MeshRef, load_hull, parse_mesh
 
 GEOM_TYPES = {
     "box": mujoco.mjtGeom.mjGEOM_BOX, "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
     "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
-    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE, "mesh": mujoco.mjtGeom.mjGEOM_MESH,
 }
 SHAPE_SIZE_LEN = {"box": 3, "cylinder": 2, "sphere": 1, "ellipsoid": 3, "capsule": 2}
 GENERATORS = ("open_box", "open_cylinder")
+MIN_SEGMENTS = 6
 OPEN_SIDES = ("+x", "-x", "+y", "-y", "+z", "-z")
 PART_KEYS = ("shape", "size", "pos", "euler_deg", "rgba")
 
@@ -38,9 +43,12 @@ class Part:
     pos: tuple[float, float, float] = (0.0, 0.0, 0.0)
     quat: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
     rgba: tuple[float, float, float, float] | None = None   # None: the object's colour
+    mesh: MeshRef | None = None     # shape "mesh": the file; size is then the hull's half extents
 
     @property
     def volume(self) -> float:
+        if self.mesh is not None:
+            return float(load_hull(self.mesh).volume)
         s = self.size
         return {"box": lambda: 8 * s[0] * s[1] * s[2], "sphere": lambda: 4 / 3 * math.pi * s[0] ** 3,
                 "ellipsoid": lambda: 4 / 3 * math.pi * s[0] * s[1] * s[2],
@@ -51,7 +59,7 @@ class Part:
         s = self.size
         return np.array({"box": (s[0], s[1], s[2]) if len(s) == 3 else (0, 0, 0), "cylinder": (s[0], s[0], s[-1]),
                          "sphere": (s[0],) * 3, "ellipsoid": tuple(s[:3]) if len(s) == 3 else (0, 0, 0),
-                         "capsule": (s[0], s[0], s[-1] + s[0])}[self.shape], dtype=float)
+                         "capsule": (s[0], s[0], s[-1] + s[0]), "mesh": tuple(s)}[self.shape], dtype=float)
 
     def aabb(self, pos=(0.0, 0.0, 0.0), quat=(1.0, 0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
         """Axis-aligned box of the part's local box, in a frame where its parent sits at pos/quat."""
@@ -81,16 +89,6 @@ def euler_quat(euler_deg) -> tuple[float, float, float, float]:
 
 def pad_size(size) -> list[float]:
     return [float(v) for v in size] + [0.0] * (3 - len(size))
-
-
-def num_list(path, field, value, length=None, positive=False) -> tuple[float, ...]:
-    ok = isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
-                                                  for v in value)
-    if not ok or (length is not None and len(value) != length):
-        raise SpecError(path, field, f"a list of {length or 'some'} numbers", value)
-    if positive and any(v <= 0 for v in value):
-        raise SpecError(path, field, "positive numbers", value)
-    return tuple(float(v) for v in value)
 
 
 # ---------------------------------------------------------------- generated shapes
@@ -152,60 +150,64 @@ def _transform(parts: list[Part], pos, quat) -> list[Part]:
     for p in parts:
         q = np.zeros(4)
         mujoco.mju_mulQuat(q, np.asarray(quat, float), np.asarray(p.quat, float))
-        out.append(Part(p.shape, p.size, tuple((np.asarray(pos) + rot @ np.asarray(p.pos)).round(6).tolist()),
-                        tuple(float(v) for v in q), p.rgba))
+        out.append(replace(p, pos=tuple((np.asarray(pos) + rot @ np.asarray(p.pos)).round(6).tolist()),
+                           quat=tuple(float(v) for v in q)))
     return out
 
 
+def _keys(path, field: str, raw: dict, allowed, what: str) -> None:
+    for key in raw:
+        if key not in allowed:
+            raise SpecError(path, f"{field}.{key}", f"{what} {list(allowed)}")
+
+
+def _generated(path, field: str, kind: str, args) -> tuple[list[Part], Cavity]:
+    """An open box or open cylinder from its arguments, in its own frame."""
+    if not isinstance(args, dict):
+        raise SpecError(path, field, "a mapping of shape arguments", args)
+    wall = number(path, f"{field}.wall", args.get("wall"), 0.0, low_open=True, unit="m")
+    size = num_list(path, f"{field}.size", args.get("size"), 3 if kind == "open_box" else 2, positive=True)
+    if 2 * wall >= min(size):
+        raise SpecError(path, f"{field}.wall", f"less than half the smallest size ({min(size)})", wall)
+    if kind == "open_box":
+        side = args.get("open", "+z")
+        if side not in OPEN_SIDES:
+            raise SpecError(path, f"{field}.open", f"one of {list(OPEN_SIDES)}", side)
+        return open_box(size, wall, side)
+    segments = number(path, f"{field}.segments", args.get("segments", 16), MIN_SEGMENTS, integer=True)
+    return open_cylinder(size, wall, segments)
+
+
 def parse_part(path, field: str, raw) -> tuple[list[Part], Cavity | None]:
-    """One entry of a `parts` list: a primitive, or a generated shape (several primitives)."""
+    """One entry of a `parts` list: a primitive, a generated shape (several primitives) or a mesh."""
     if not isinstance(raw, dict):
-        raise SpecError(path, field, f"a mapping: a primitive {{shape, size, ...}} or one of {list(GENERATORS)}", raw)
-    generated = [k for k in raw if k in GENERATORS]
+        raise SpecError(path, field, f"a mapping: a primitive {{shape, size, ...}}, a mesh or one of "
+                        f"{list(GENERATORS)}", raw)
+    placement = ("pos", "euler_deg", "rgba")
     pos = num_list(path, f"{field}.pos", raw.get("pos", [0, 0, 0]), 3)
     quat = euler_quat(num_list(path, f"{field}.euler_deg", raw.get("euler_deg", [0, 0, 0]), 3))
     rgba = num_list(path, f"{field}.rgba", raw["rgba"], 4) if "rgba" in raw else None
+    generated = [k for k in raw if k in GENERATORS]
     if generated:
-        (kind,) = generated
-        for key in raw:
-            if key not in (kind, "pos", "euler_deg", "rgba"):
-                raise SpecError(path, f"{field}.{key}", f"a key of a generated part: [{kind}, pos, euler_deg, rgba]")
-        args = raw[kind]
-        if not isinstance(args, dict):
-            raise SpecError(path, f"{field}.{kind}", "a mapping of shape arguments", args)
-        wall = args.get("wall")
-        if isinstance(wall, bool) or not isinstance(wall, (int, float)) or wall <= 0:
-            raise SpecError(path, f"{field}.{kind}.wall", "a positive wall thickness (m)", wall)
-        if kind == "open_box":
-            size = num_list(path, f"{field}.{kind}.size", args.get("size"), 3, positive=True)
-            side = args.get("open", "+z")
-            if side not in OPEN_SIDES:
-                raise SpecError(path, f"{field}.{kind}.open", f"one of {list(OPEN_SIDES)}", side)
-            if 2 * wall >= min(size):
-                raise SpecError(path, f"{field}.{kind}.wall", f"less than half the smallest size ({min(size)})", wall)
-            parts, cavity = open_box(size, float(wall), side)
-        else:
-            size = num_list(path, f"{field}.{kind}.size", args.get("size"), 2, positive=True)
-            segments = args.get("segments", 16)
-            if not isinstance(segments, int) or isinstance(segments, bool) or segments < 6:
-                raise SpecError(path, f"{field}.{kind}.segments", "an integer >= 6", segments)
-            if 2 * wall >= min(size):
-                raise SpecError(path, f"{field}.{kind}.wall", f"less than half the smallest size ({min(size)})", wall)
-            parts, cavity = open_cylinder(size, float(wall), segments)
-        parts = [Part(p.shape, p.size, p.pos, p.quat, rgba) for p in _transform(parts, pos, quat)]
+        kind = generated[0]
+        _keys(path, field, raw, (kind, *placement), "a key of a generated part")
+        parts, cavity = _generated(path, f"{field}.{kind}", kind, raw[kind])
+        parts = [replace(p, rgba=rgba) for p in _transform(parts, pos, quat)]
         if quat != (1.0, 0.0, 0.0, 0.0):
             cavity = None    # a turned cavity is not axis-aligned with the object: declare it
         else:
             cavity = Cavity(cavity.half_extents, tuple(float(a + b) for a, b in zip(cavity.offset, pos)))
         return parts, cavity
-    for key in raw:
-        if key not in PART_KEYS:
-            raise SpecError(path, f"{field}.{key}",
-                            f"a part key {list(PART_KEYS)} or a generated shape {list(GENERATORS)}")
+    if "mesh" in raw:
+        _keys(path, field, raw, ("mesh", *placement), "a key of a mesh part")
+        ref = parse_mesh(path, f"{field}.mesh", raw["mesh"])
+        half = tuple(float(v) for v in (load_hull(ref).extents / 2).round(6))
+        return [Part("mesh", half, pos, quat, rgba, ref)], None
+    _keys(path, field, raw, PART_KEYS, f"a mesh, a generated shape {list(GENERATORS)} or a part key")
     shape = raw.get("shape")
     if shape not in SHAPE_SIZE_LEN:
-        raise SpecError(path, f"{field}.shape", f"one of {sorted(SHAPE_SIZE_LEN)} (or a generated shape "
-                        f"{list(GENERATORS)})", shape)
+        raise SpecError(path, f"{field}.shape", f"one of {sorted(SHAPE_SIZE_LEN)} (or a mesh or a generated "
+                        f"shape {list(GENERATORS)})", shape)
     size = num_list(path, f"{field}.size", raw.get("size"), SHAPE_SIZE_LEN[shape], positive=True)
     return [Part(shape, size, pos, quat, rgba)], None
 

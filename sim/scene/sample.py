@@ -65,10 +65,20 @@ def _overlaps(xy, radius, placed) -> bool:
                for p, r in placed)
 
 
+def zone_point(zone: dict, rng: np.random.Generator) -> np.ndarray:
+    """A uniform draw from a zone: a rectangle {xy_min, xy_max} or a disc {center_xy, radius}
+    (uniform over the disc's area, hence the square root on the radius)."""
+    if "radius" in zone:
+        r = zone["radius"] * np.sqrt(rng.uniform())
+        angle = rng.uniform(0.0, 2 * np.pi)
+        return np.asarray(zone["center_xy"], float) + r * np.array([np.cos(angle), np.sin(angle)])
+    return rng.uniform(np.asarray(zone["xy_min"], float), np.asarray(zone["xy_max"], float))
+
+
 def sample_object_poses(task: TaskSpec, rng: np.random.Generator) -> dict[str, list[float]]:
-    """Explicit poses get +-2 cm / +-10 deg, shrunk on collision; zoned objects are drawn in
-    their zone; the nominal pose is kept only when nothing valid is found. An object `on` another
-    keeps its offset in that object's frame (it moves with it)."""
+    """Explicit poses get +-2 cm / +-10 deg, shrunk on collision, and keep the nominal pose when
+    no shrink fits; zoned objects are drawn in their zone (the 100th draw is kept even if it
+    collides). An object `on` another keeps its offset in that object's frame (it moves with it)."""
     placed: list[tuple[tuple[float, float], float]] = []
     poses: dict[str, list[float]] = {}
     for name, obj in task.objects.items():
@@ -77,10 +87,8 @@ def sample_object_poses(task: TaskSpec, rng: np.random.Generator) -> dict[str, l
             poses[name] = [round(v, 6) for v in _on_pose(poses[obj.on], obj)]
             continue
         if obj.zone is not None:
-            zone = task.zones[obj.zone]
-            lo, hi = np.array(zone["xy_min"]), np.array(zone["xy_max"])
             for _ in range(100):
-                xy = rng.uniform(lo, hi)
+                xy = zone_point(task.zones[obj.zone], rng)
                 if not _overlaps(xy, radius, placed):
                     break
             pose = [float(xy[0]), float(xy[1]), float(rng.uniform(-180, 180))]
@@ -107,14 +115,33 @@ def _on_pose(support: list[float], obj) -> list[float]:
             support[2] + obj.yaw_deg]
 
 
+def zone_centre(zone: dict) -> np.ndarray:
+    if "radius" in zone:
+        return np.asarray(zone["center_xy"], float)
+    return (np.asarray(zone["xy_min"], float) + np.asarray(zone["xy_max"], float)) / 2
+
+
 def nominal_object_poses(task: TaskSpec) -> dict[str, list[float]]:
+    """The layout as written: declared poses, zoned objects at their zone's centre (yaw 0)."""
     poses: dict[str, list[float]] = {}
-    for n, o in task.objects.items():
-        if o.on is not None and o.on in poses:
-            poses[n] = _on_pose(poses[o.on], o)
-        elif o.xy is not None and o.on is None:
-            poses[n] = [o.xy[0], o.xy[1], o.yaw_deg]
-    return poses
+    for name, obj in task.objects.items():
+        if obj.on is not None:
+            poses[name] = _on_pose(poses[obj.on], obj)
+        elif obj.zone is not None:
+            poses[name] = [*zone_centre(task.zones[obj.zone]).tolist(), 0.0]
+        else:
+            poses[name] = [obj.xy[0], obj.xy[1], obj.yaw_deg]
+    return {name: [round(float(v), 6) for v in pose] for name, pose in poses.items()}
+
+
+def nominal_sample(task: TaskSpec) -> SceneSample:
+    """The task's scene as written: nominal poses, table height and visuals, no distractors."""
+    return SceneSample(
+        task=task.name, channel="nominal", seed=0, anchor=None, table_height=task.table.height,
+        object_poses=nominal_object_poses(task),
+        background=dict(assets.NOMINAL_BACKGROUND), table_texture=dict(assets.NOMINAL_TEXTURE),
+        lighting=json.loads(json.dumps(assets.NOMINAL_LIGHTING)),
+    )
 
 
 def sample_table_height(task: TaskSpec, rng: np.random.Generator) -> float:

@@ -51,14 +51,11 @@ class SceneObserver:
         return out
 
     def contacts(self, data: mujoco.MjData) -> frozenset[tuple[str, str]]:
-        model = self.scene.model
-        pairs = set()
-        for c in data.contact[: data.ncon]:
-            a = self._owner[model.geom_bodyid[c.geom1]]
-            b = self._owner[model.geom_bodyid[c.geom2]]
-            if a and b and a != b:
-                pairs.add(tuple(sorted((a, b))))
-        return frozenset(pairs)
+        if not data.ncon:
+            return frozenset()
+        # one numpy lookup for all contacts: a Python loop over data.contact costs ~10 us per contact
+        owners = self._owner[self.scene.model.geom_bodyid[data.contact.geom[: data.ncon]]]
+        return frozenset(tuple(sorted((a, b))) for a, b in owners if a and b and a != b)
 
     def state(self, data: mujoco.MjData) -> SceneState:
         return SceneState(
