@@ -4,6 +4,11 @@ One HDF5 file per episode holding what replay needs to reproduce it exactly: the
 integration state after homing, the seed and resolved scene sample, and per control step the action
 executed next followed by the post-step robot/object state and the evaluator state (paper:
 "Online Teleoperation Setup"). Reading validates everything and names the file and field at fault.
+
+Per step, ``step_flags`` holds the operator stream's ``StepFlag`` bits (teleop/streams/sanitizer.py:
+dropped or out-of-order frames, non-finite keypoints, bad or unreachable wrist poses; 0 = clean) and
+the optional ``step_reasons`` dataset the same steps' reasons as text, one per line ("" = clean).
+Files written before ``step_reasons`` existed read with every reason "".
 """
 
 from __future__ import annotations
@@ -45,6 +50,7 @@ class RawRecording:
     step_flags: np.ndarray            # [T] uint8, operator-stream flags (0 = clean)
     success: bool
     extra: dict = field(default_factory=dict)
+    step_reasons: list[str] = field(default_factory=list)   # [T] why a step was flagged ("" = clean)
 
     @property
     def num_steps(self) -> int:
@@ -56,6 +62,7 @@ _ARRAYS = ("initial_state", "action", "robot_qpos", "robot_qvel", "object_pose",
 _ATTRS = ("task", "embodiment", "episode_id", "seed", "scene_sample", "operator", "control_hz",
           "substeps", "success")
 _LISTS = ("actuator_names", "robot_joint_names", "object_names", "stage_ids")
+REASONS = "step_reasons"      # optional: absent in files written before it existed
 
 
 def write_raw(path: str | Path, rec: RawRecording) -> Path:
@@ -69,6 +76,9 @@ def write_raw(path: str | Path, rec: RawRecording) -> Path:
             f.attrs[key] = json.dumps(getattr(rec, key))
         for key in _ARRAYS:
             f.create_dataset(key, data=getattr(rec, key), compression="gzip", compression_opts=4)
+        reasons = rec.step_reasons or [""] * rec.num_steps
+        f.create_dataset(REASONS, data=np.array(reasons, dtype=h5py.string_dtype()), compression="gzip",
+                         compression_opts=4)
     return path
 
 
@@ -98,6 +108,13 @@ def read_raw(path: str | Path) -> RawRecording:
                 values[key] = f[key][()]
             except OSError as exc:
                 raise SpecError(path, key, "readable data (file is truncated)") from exc
+        if REASONS in f:
+            try:
+                values[REASONS] = [str(r) for r in f[REASONS].asstr()[()]]
+            except (OSError, TypeError, ValueError) as exc:
+                raise SpecError(path, REASONS, "a readable dataset of UTF-8 strings [T]") from exc
+        else:
+            values[REASONS] = [""] * len(values["action"])
     rec = RawRecording(**values)
     _check_consistency(path, rec)
     return rec
@@ -119,3 +136,7 @@ def _check_consistency(path: Path, rec: RawRecording) -> None:
     for key, shape in expected.items():
         if getattr(rec, key).shape != shape:
             raise SpecError(path, key, f"shape {shape}", tuple(getattr(rec, key).shape))
+    if rec.step_flags.dtype != np.uint8:
+        raise SpecError(path, "step_flags", "dtype uint8 (StepFlag bits)", str(rec.step_flags.dtype))
+    if len(rec.step_reasons) != T:
+        raise SpecError(path, REASONS, f"{T} strings (one per step)", len(rec.step_reasons))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from evaluation.args import ArgReader
-from evaluation.geometry import box_distance, rotation
+from evaluation.geometry import box_distance, length, rotation
 from evaluation.grammar import Condition, register
 from evaluation.state import contact
 from evaluation.step import EvalStep
@@ -48,7 +48,7 @@ class StruckOnce(Condition):
         tool, target = s.obj(self.tool), s.obj(self.target)
         arm = rotation(tool.quat) @ self.head
         head = np.asarray(tool.pos, float) + arm
-        speed = float(np.linalg.norm(np.asarray(tool.lin_vel, float) + np.cross(tool.ang_vel, arm)))
+        speed = float(length(np.asarray(tool.lin_vel, float) + np.cross(tool.ang_vel, arm)))
         dist = box_distance(head, target.pos, target.quat, self.target_half)
         if not self.visiting and dist <= self.radius:
             self.visiting, self.counted = True, False
@@ -56,7 +56,7 @@ class StruckOnce(Condition):
         if self.visiting:
             self.fast |= speed >= self.min_speed
             self.responded |= (contact(s.state, self.tool, self.target)
-                               or float(np.linalg.norm(target.lin_vel)) >= self.response_speed)
+                               or float(length(target.lin_vel)) >= self.response_speed)
             if self.fast and (self.responded or not self.require_response) and not self.counted:
                 self.strikes, self.counted = self.strikes + 1, True
             if dist > self.exit_radius:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from evaluation.args import ArgReader
+from evaluation.geometry import length
 from evaluation.grammar import CompileScope
 from evaluation.state import TaskContext
 from evaluation.step import EvalStep
@@ -53,7 +54,7 @@ class GraspMonitor:
         for i, name in enumerate(self.objects):
             o = s.obj(name)
             pos = np.asarray(o.pos, dtype=float)
-            v, w = float(np.linalg.norm(o.lin_vel)), float(np.linalg.norm(o.ang_vel))
+            v, w = float(length(o.lin_vel)), float(length(o.ang_vel))
             lifted = pos[2] - s.initial_obj(name).pos[2] >= c["lift_min"]
             held = lifted and s.held_by(name, "any", c["hand_max_dist"])
             stable = v <= c["stable_lin_vel"] and w <= c["stable_ang_vel"]
@@ -61,7 +62,7 @@ class GraspMonitor:
             rel = self._palm_offset(s, pos) if held else None
             slipping = False
             if rel is not None and self.prev_rel[i] is not None:
-                slipping = float(np.linalg.norm(rel - self.prev_rel[i])) / s.dt > c["slip_speed"]
+                slipping = float(length(rel - self.prev_rel[i])) / s.dt > c["slip_speed"]
             self.slips[i] += int(slipping and not self.slipping[i])
             self.slipping[i], self.prev_rel[i] = slipping, rel
             big_l = 1.0 if lifted else 0.0

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from evaluation.args import ArgReader
-from evaluation.geometry import masked_distance, rotation, to_local, vertical_half_extent
+from evaluation.geometry import length, masked_distance, rotation, to_local, vertical_half_extent
 from evaluation.grammar import Condition, register
 from evaluation.state import TABLE
 from evaluation.step import EvalStep
@@ -159,7 +159,7 @@ class InZone(Condition):
         xy = np.asarray(s.obj(self.object).pos, dtype=float)[:2]
         if "xy_min" in self.zone:
             return bool(np.all(xy >= self.zone["xy_min"]) and np.all(xy <= self.zone["xy_max"]))
-        return float(np.linalg.norm(xy - self.zone["center_xy"])) <= self.zone["radius"]
+        return float(length(xy - self.zone["center_xy"])) <= self.zone["radius"]
 
 
 @register("relative_offset")

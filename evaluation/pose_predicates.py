@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 
 from evaluation.args import ArgReader
-from evaluation.geometry import Z_UP, angle_deg, axis_extent, masked_distance, rotation, tilt_deg, vertical_half_extent
+from evaluation.geometry import (Z_UP, angle_deg, axis_extent, length, masked_distance, rotation, tilt_deg,
+                                 vertical_half_extent)
 from evaluation.grammar import Condition, register
 from evaluation.state import HANDS, contact
 from evaluation.step import EvalStep
@@ -45,7 +46,7 @@ class Aligned(Condition):
 def _mouth_axis(info) -> np.ndarray:
     axis = info.mouth_axis
     axis = Z_UP if axis is None else np.asarray(axis, dtype=float)
-    return axis / np.linalg.norm(axis)
+    return axis / length(axis)
 
 
 @register("tilted_over")
@@ -81,7 +82,7 @@ class AtRest(Condition):
 
     def __call__(self, s: EvalStep) -> bool:
         states = [s.obj(n) for n in self.objects]
-        return all(np.linalg.norm(o.lin_vel) <= self.max_lin and np.linalg.norm(o.ang_vel) <= self.max_ang
+        return all(length(o.lin_vel) <= self.max_lin and length(o.ang_vel) <= self.max_ang
                    for o in states)
 
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from evaluation.args import ArgReader
 from evaluation.errors import StateError, TaskSpecError, one_of
+from evaluation.geometry import length
 from evaluation.grammar import CompileScope
 from evaluation.state import SceneState, TaskContext
 
@@ -60,7 +61,7 @@ class SafetyMonitor:
             return False
         if "xy_min" in z:
             return bool(np.any(xy < z["xy_min"]) or np.any(xy > z["xy_max"]))
-        return float(np.linalg.norm(xy - z["center_xy"])) > z["radius"]
+        return float(length(xy - z["center_xy"])) > z["radius"]
 
     def drop(self, state: SceneState) -> bool:
         """A tracked object is below the tabletop by more than the margin, or outside the table zone."""
@@ -74,8 +75,8 @@ class SafetyMonitor:
         """A tracked object moves faster than the configured linear (or angular) limit."""
         for name in self.speed_objects:
             o = _obj(state, name)
-            if np.linalg.norm(o.lin_vel) > self.max_lin:
+            if length(o.lin_vel) > self.max_lin:
                 return True
-            if self.max_ang is not None and np.linalg.norm(o.ang_vel) > self.max_ang:
+            if self.max_ang is not None and length(o.ang_vel) > self.max_ang:
                 return True
         return False

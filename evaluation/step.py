@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from evaluation.errors import StateError
-from evaluation.geometry import rotation
+from evaluation.geometry import length, rotation
 from evaluation.state import HANDS, ObjectInfo, ObjectState, SceneState, TaskContext, contact
 
 
@@ -70,6 +70,6 @@ class EvalStep:
             if contact(self.state, name, f"{h}_hand"):
                 return True
             palm = self.state.hands.get(h)
-            if palm is not None and np.linalg.norm(np.asarray(palm, dtype=float) - pos) <= hand_max_dist:
+            if palm is not None and length(np.asarray(palm, dtype=float) - pos) <= hand_max_dist:
                 return True
         return False

@@ -3,7 +3,8 @@ robot and object state and the evaluator state, plus the seed, scene sample and 
 state, so the replay stage can reproduce the episode bit for bit.
 
 Its per-step work is a handful of array copies into preallocated buffers (measured by
-`b2d bench recorder`).
+`b2d bench recorder`). Operators driven by a stream (teleop/session.py) also report, per step,
+the stream's ``StepFlag`` bits and their reasons; they go into ``step_flags`` / ``step_reasons``.
 """
 
 from __future__ import annotations
@@ -22,6 +23,10 @@ from sim.state_io import get_state
 
 
 class Operator(Protocol):
+    """Plays the person. Optionally, after each ``act`` an operator exposes ``step_flags`` (int,
+    StepFlag bits) and ``step_reasons`` (str, one reason per line) of that step; operators without
+    them record 0 / ""."""
+
     name: str
 
     def reset(self, scene: Scene, data: mujoco.MjData) -> None: ...
@@ -35,6 +40,7 @@ class StepBuffer:
     def __init__(self, shapes: dict[str, tuple], dtypes: dict[str, type], capacity: int = 1024):
         self.arrays = {k: np.zeros((capacity, *s), dtype=dtypes.get(k, np.float64)) for k, s in shapes.items()}
         self.count = 0
+        self.notes: dict[int, str] = {}      # step -> text, only for the (rare) steps that have one
 
     def push(self, **values) -> None:
         if self.count == next(iter(self.arrays.values())).shape[0]:
@@ -45,6 +51,9 @@ class StepBuffer:
 
     def result(self) -> dict[str, np.ndarray]:
         return {k: a[: self.count].copy() for k, a in self.arrays.items()}
+
+    def note_list(self) -> list[str]:
+        return [self.notes.get(i, "") for i in range(self.count)]
 
 
 def home(scene: Scene) -> mujoco.MjData:
@@ -64,44 +73,83 @@ def new_buffer(scene: Scene, n_stages: int) -> StepBuffer:
 
 
 def record_step(scene: Scene, observer: SceneObserver, evaluator: EpisodeEvaluator, buf: StepBuffer,
-                data: mujoco.MjData, action: np.ndarray):
-    """The recorder's work after one control step: snapshot, evaluator update, buffer push."""
+                data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = ""):
+    """The recorder's work after one control step: snapshot, evaluator update, buffer push (with
+    the operator stream's flags for the step and, when flagged, why)."""
     state = observer.state(data)
     record = evaluator.update(state, physics.CONTROL_DT)
+    if reasons:
+        buf.notes[buf.count] = reasons
     buf.push(action=action, robot_qpos=data.qpos[scene.robot_qpos_adr],
              robot_qvel=data.qvel[scene.robot_dof_adr],
              object_pose=np.stack([np.concatenate([o.pos, o.quat]) for o in state.objects.values()]),
-             terminal=record.terminal, stage_latched=record.stage_latched, step_flags=0)
+             terminal=record.terminal, stage_latched=record.stage_latched, step_flags=flags)
     return record
+
+
+HORIZON_FACTOR = 1.5            # paper: the evaluation horizon is 1.5x the recorded expert horizon
+NO_EXPERT_HORIZON_STEPS = 10_000
+
+
+def evaluation_horizon(metrics: dict) -> int:
+    """Control steps an episode may run: 1.5x the task's expert horizon (either spelling the evaluator
+    accepts), or NO_EXPERT_HORIZON_STEPS for a task without one."""
+    expert = metrics.get("expert_horizon_steps", metrics.get("expert_time_step"))
+    return int(HORIZON_FACTOR * expert) if expert else NO_EXPERT_HORIZON_STEPS
+
+
+def episode_horizon(scene: Scene, max_steps: int | None = None) -> int:
+    horizon = evaluation_horizon(scene.task.metrics)
+    return horizon if max_steps is None else min(horizon, max_steps)
+
+
+class EpisodeRecording:
+    """One episode being recorded, from the homed state ``data``: ``step`` after each control step,
+    ``finish`` assembles the raw recording."""
+
+    def __init__(self, scene: Scene, data: mujoco.MjData):
+        self.scene = scene
+        self.initial_state = get_state(scene.model, data)
+        self.observer = SceneObserver(scene)
+        self.evaluator = EpisodeEvaluator(scene.task.metrics, self.observer.context, source=str(scene.task.source))
+        self.buf = new_buffer(scene, len(self.evaluator.stage_ids))
+
+    @property
+    def steps(self) -> int:
+        return self.buf.count
+
+    def step(self, data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = ""):
+        return record_step(self.scene, self.observer, self.evaluator, self.buf, data, action, flags, reasons)
+
+    def finish(self, episode_id: str, seed: int, operator: str, termination: str | None = None,
+               extra: dict | None = None) -> RawRecording:
+        scene, model = self.scene, self.scene.model
+        result = self.evaluator.result(termination=termination or ("stable_success" if self.evaluator.stable
+                                                                   else "horizon"))
+        return RawRecording(
+            task=scene.task.name, embodiment=scene.layout.embodiment, episode_id=episode_id, seed=seed,
+            scene_sample=scene.sample.to_json(), operator=operator, control_hz=physics.CONTROL_HZ,
+            substeps=physics.SUBSTEPS, initial_state=self.initial_state,
+            actuator_names=[model.actuator(i).name for i in range(model.nu)],
+            robot_joint_names=list(scene.layout.joint_names), object_names=list(scene.object_names),
+            stage_ids=list(self.evaluator.stage_ids), success=bool(result.success), **self.buf.result(),
+            extra={"lscr": float(result.lscr or 0.0), "episode_record": result.to_dict(), **(extra or {})},
+            step_reasons=self.buf.note_list(),
+        )
 
 
 def record_episode(scene: Scene, operator: Operator, episode_id: str, seed: int,
                    max_steps: int | None = None, stop_on_success: bool = True) -> RawRecording:
-    model = scene.model
     data = home(scene)
-    initial_state = get_state(model, data)
-    observer = SceneObserver(scene)
-    evaluator = EpisodeEvaluator(scene.task.metrics, observer.context, source=str(scene.task.source))
+    episode = EpisodeRecording(scene, data)
     operator.reset(scene, data)
-    stage_ids = evaluator.stage_ids
-    buf = new_buffer(scene, len(stage_ids))
-    horizon = max_steps if max_steps is not None else scene.task.metrics.get("horizon_steps") or 10_000
+    horizon = episode_horizon(scene, max_steps)
     step = 0
     while step < horizon and not operator.done(step):
         action = operator.act(step, data)
-        physics.step_control(model, data, action)
-        record = record_step(scene, observer, evaluator, buf, data, action)
+        physics.step_control(scene.model, data, action)
+        record = episode.step(data, action, getattr(operator, "step_flags", 0), getattr(operator, "step_reasons", ""))
         step += 1
         if stop_on_success and record.stable:
             break    # reach-and-stop
-    arrays = buf.result()
-    result = evaluator.result(termination="stable_success" if evaluator.stable else "horizon")
-    return RawRecording(
-        task=scene.task.name, embodiment=scene.layout.embodiment, episode_id=episode_id, seed=seed,
-        scene_sample=scene.sample.to_json(), operator=operator.name, control_hz=physics.CONTROL_HZ,
-        substeps=physics.SUBSTEPS, initial_state=initial_state,
-        actuator_names=[model.actuator(i).name for i in range(model.nu)],
-        robot_joint_names=list(scene.layout.joint_names), object_names=list(scene.object_names),
-        stage_ids=list(stage_ids), success=bool(result.success), **arrays,
-        extra={"lscr": float(result.lscr or 0.0), "episode_record": result.to_dict()},
-    )
+    return episode.finish(episode_id, seed, operator.name)

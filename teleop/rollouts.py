@@ -13,12 +13,11 @@ from sim.registry import channel, channel_names, names
 from sim.scene.builder import build_scene
 from sim.scene.sample import SceneSample, channel_sample, task_seed
 from sim.tasks import load_task
-from teleop.recorder import record_episode
+from teleop.recorder import evaluation_horizon, record_episode
 from teleop.scripted_operator import ScriptedOperator
 
 log = logging.getLogger(__name__)
 EVAL_SEED_OFFSET = 50_000_000      # evaluation seeds live in the upper half of the task namespace
-HORIZON_FACTOR = 1.5
 
 
 def rollout_seed(task: str, channel_name: str, index: int) -> int:
@@ -30,7 +29,7 @@ def run_rollouts(task: str, embodiment: str, channel_name: str, anchors: list[tu
                  episodes: int, max_steps: int | None = None, policy: str = "scripted_operator") -> list[dict]:
     """One row per rollout: the evaluator's episode record plus labels. Errors count as failures."""
     spec, chan = load_task(task), channel(channel_name)
-    horizon = int(HORIZON_FACTOR * spec.metrics.get("expert_horizon_steps", 1000))
+    horizon = evaluation_horizon(spec.metrics)
     if max_steps is not None:
         horizon = min(horizon, max_steps)
     rows = []
