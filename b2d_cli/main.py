@@ -9,8 +9,10 @@ from pathlib import Path
 
 import click
 
+from b2d_cli.media_cmd import export, show
 from b2d_cli.tactile_cmd import tactile
 from b2d_cli.tasks_cmd import tasks
+from b2d_cli.teleop_cmd import teleop
 from sim import registry
 from sim.errors import SpecError, UnknownNameError
 
@@ -117,7 +119,11 @@ def record(task, embodiment, episodes, out_dir, first_index, max_steps) -> None:
 @click.option("--profile", default="preview", show_default=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
 @click.option("--max-frames", default=None, type=int, help="Render at most this many frames per episode.")
-def replay(raw, profile, out_dir, max_frames) -> None:
+@click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
+              help="Processes rendering each episode's frames (same arrays for any count).")
+@click.option("--drift-bound-m", default=0.005, show_default=True, type=click.FloatRange(min=0.0),
+              help="Flag frames whose replayed object positions drift further than this from the recording.")
+def replay(raw, profile, out_dir, max_frames, workers, drift_bound_m) -> None:
     """Replay raw recordings into HDF5 episodes under a sensor profile."""
     from episodes.manifest import write_manifest
     from episodes.stages import raw_to_episode
@@ -127,7 +133,8 @@ def replay(raw, profile, out_dir, max_frames) -> None:
     with click.progressbar(raw, label=f"replaying under '{profile}'", file=sys.stderr) as paths:
         for path in paths:
             try:
-                out = raw_to_episode(path, prof, out_dir, max_frames=max_frames)
+                out = raw_to_episode(path, prof, out_dir, max_frames=max_frames, workers=workers,
+                                     drift_bound_m=drift_bound_m)
                 click.echo(f"\n{path} -> {out}", err=True)
             except (SpecError, UnknownNameError) as exc:   # one bad episode never stops the others
                 failures += 1
@@ -161,12 +168,31 @@ def validate(episode) -> None:
 
 
 @cli.command()
-@click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "tactile-replay", "embodiments"]))
+@click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "tactile-replay", "labels", "media",
+                                          "embodiments", "demos", "retarget", "teleop"]))
 @click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay, tactile-replay).")
-@click.option("--steps", default=120, show_default=True, help="Control steps to record (recorder, replay).")
-def bench(part, profile, steps) -> None:
+@click.option("--steps", default=120, show_default=True,
+              help="Control steps to record (recorder, replay, teleop); frames to retarget (retarget).")
+@click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
+              help="replay: also render with this many processes and report the speed-up.")
+@click.option("--episodes", default=4, show_default=True, type=click.IntRange(min=1),
+              help="demos: demonstrations per setting.")
+@click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26).")
+def bench(part, profile, steps, workers, episodes, setting) -> None:
     """Print benchmark figures as JSON on stdout."""
-    if part == "tactile":
+    if part == "demos":
+        from teleop.demo_bench import run_demo_bench
+        figures = run_demo_bench(episodes=episodes, only=list(setting) or None)
+    elif part == "media":
+        from episode_media.bench import run_media_bench
+        figures = run_media_bench(profile=profile, steps=steps)
+    elif part == "teleop":
+        from teleop.session_bench import run_session_bench
+        figures = run_session_bench(steps=steps)
+    elif part == "retarget":
+        from teleop.retarget.bench import run_bench
+        figures = run_bench(frames=steps, echo=False)
+    elif part == "tactile":
         from tactile.bench import run_tactile_bench
         figures = run_tactile_bench()
     elif part == "embodiments":
@@ -174,7 +200,7 @@ def bench(part, profile, steps) -> None:
         figures = run_embodiment_bench()
     else:
         from b2d_cli import benchmarks
-        figures = benchmarks.run(part, profile=profile, steps=steps)
+        figures = benchmarks.run(part, profile=profile, steps=steps, workers=workers)
     click.echo(json.dumps(figures, indent=2))
 
 
@@ -187,7 +213,9 @@ def bench(part, profile, steps) -> None:
 @click.option("--episodes", default=None, type=int, help="Demonstrations per setting.")
 @click.option("--eval-episodes", default=None, type=int, help="Rollouts per (setting, channel).")
 @click.option("--max-steps", default=None, type=int, help="Cap on control steps per episode.")
-def materialize(settings_, profile, episodes, eval_episodes, max_steps) -> None:
+@click.option("--render-workers", default=None, type=click.IntRange(min=1),
+              help="Processes rendering each episode (default: $B2D_RENDER_WORKERS or 1).")
+def materialize(settings_, profile, episodes, eval_episodes, max_steps, render_workers) -> None:
     """Materialize the whole asset chain (recordings -> ... -> evaluation table) with Dagster."""
     import dagster as dg
 
@@ -196,7 +224,7 @@ def materialize(settings_, profile, episodes, eval_episodes, max_steps) -> None:
     from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
     overrides = {k: v for k, v in {"profile": profile, "demo_episodes": episodes, "eval_episodes": eval_episodes,
-                                   "max_steps": max_steps}.items() if v is not None}
+                                   "max_steps": max_steps, "render_workers": render_workers}.items() if v is not None}
     settings = FactorySettings.from_env(**overrides)
     for key in settings_:
         registry.parse_setting_key(key)
@@ -214,8 +242,11 @@ def materialize(settings_, profile, episodes, eval_episodes, max_steps) -> None:
     sys.exit(0 if all(r.success for r in results) else 1)
 
 
+cli.add_command(export)
+cli.add_command(show)
 cli.add_command(tactile)
 cli.add_command(tasks)
+cli.add_command(teleop)
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ class FactorySettings:
     demo_episodes: int          # raw recordings per setting
     eval_episodes: int          # rollouts per (setting, channel)
     max_steps: int | None       # cap on control steps per episode (tests, quick looks)
+    render_workers: int = 1     # processes rendering one episode's frames (same arrays for any count)
 
     @classmethod
     def from_env(cls, **overrides) -> "FactorySettings":
@@ -33,6 +34,7 @@ class FactorySettings:
             demo_episodes=int(os.environ.get("B2D_DEMO_EPISODES", "2")),
             eval_episodes=int(os.environ.get("B2D_EVAL_EPISODES", "2")),
             max_steps=int(max_steps) if max_steps else None,
+            render_workers=int(os.environ.get("B2D_RENDER_WORKERS", "1")),
         )
         values.update(overrides)
         if isinstance(values["profile"], str):

@@ -8,12 +8,21 @@ import os
 from pathlib import Path
 
 
+def temporary_beside(final: Path, tag: str = "tmp", keep_suffix: bool = False) -> Path:
+    """A hidden, per-process name beside `final`. `keep_suffix` ends it in `final`'s suffix, for
+    writers that choose the format from it (OpenCV video, USD); by default it ends in `.tmp-<pid>`,
+    so globs for finished files (`*.hdf5`) never match a file being written."""
+    if keep_suffix:
+        return final.with_name(f".{final.stem}.{tag}-{os.getpid()}{final.suffix}")
+    return final.with_name(f".{final.name}.{tag}-{os.getpid()}")
+
+
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike):
+def atomic_path(path: str | os.PathLike, keep_suffix: bool = False):
     """Yield a temporary path beside `path`; rename it over `path` only if the block succeeds."""
     final = Path(path)
     final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = final.with_name(f".{final.name}.tmp-{os.getpid()}")
+    tmp = temporary_beside(final, "tmp", keep_suffix)
     try:
         yield tmp
         os.replace(tmp, final)

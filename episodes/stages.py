@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import time
 from pathlib import Path
 
 import h5py
@@ -18,13 +19,14 @@ import numpy as np
 from episodes import schema
 from episodes.atomic import atomic_path, file_sha256
 from episodes.raw import read_raw
-from episodes.tactile_frames import TactileFrames
+from episodes.h5_concat import concat_frames
+from episodes.render_frames import FrameRenderer
 from episodes.writer import EpisodeWriter
 from sim import physics
 from sim.errors import SpecError
 from sim.registry import SensorProfile
-from sim.render import CameraRig, set_positions
-from sim.replay import replay, scene_for
+from sim.render import set_positions
+from sim.replay import DEFAULT_DRIFT_BOUND_M, replay, scene_for
 
 log = logging.getLogger(__name__)
 REPLAY_SCHEMA = "b2d.replay/1"
@@ -44,19 +46,21 @@ def frame_steps(num_steps: int, rate_hz: int) -> np.ndarray:
 # ---------------------------------------------------------------- replay
 
 
-def replay_to_file(raw_path: Path, out_path: Path) -> dict:
+def replay_to_file(raw_path: Path, out_path: Path, drift_bound_m: float = DEFAULT_DRIFT_BOUND_M) -> dict:
+    """Re-simulate a raw recording; frames whose object drift exceeds `drift_bound_m` are flagged."""
     raw = read_raw(raw_path)
-    result = replay(raw, source=raw_path)
+    result = replay(raw, source=raw_path, drift_bound_m=drift_bound_m)
     with atomic_path(out_path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs.update({"schema": REPLAY_SCHEMA, "task": raw.task, "embodiment": raw.embodiment,
                         "episode_id": raw.episode_id, "seed": raw.seed, "scene_sample": raw.scene_sample,
                         "operator": raw.operator, "raw_sha256": file_sha256(raw_path),
                         "fidelity": json.dumps(result.fidelity), "episode_metrics": json.dumps(result.episode_metrics),
                         "robot_joint_names": json.dumps(raw.robot_joint_names),
-                        "object_names": json.dumps(raw.object_names),
+                        "object_names": json.dumps(result.object_names),
+                        "articulated_joint_names": json.dumps(result.joint_names),
                         "actuator_names": json.dumps(raw.actuator_names)})
         for key in ("qpos", "robot_qpos", "robot_qvel", "robot_qeffort", "object_pose", "object_lin_vel",
-                    "object_ang_vel", "action", "drift_flags"):
+                    "object_ang_vel", "joint_qpos", "joint_qvel", "joint_qeffort", "action", "drift_flags"):
             f.create_dataset(key, data=getattr(result, key), compression="gzip", compression_opts=4)
         for key, value in result.traces.items():
             value = np.asarray(value)
@@ -68,55 +72,83 @@ def replay_to_file(raw_path: Path, out_path: Path) -> dict:
 # ---------------------------------------------------------------- render
 
 
-def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, max_frames: int | None = None) -> dict:
+def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, max_frames: int | None = None,
+                   workers: int = 1) -> dict:
+    """Render the replay's frames under `profile`. With `workers` > 1 the frame range is split into
+    contiguous parts rendered in separate processes (a renderer does not use a second core) and
+    joined chunk by chunk; the arrays are the same as with one worker.
+
+    Returns frame counts and `seconds`: time per part of the work (summed over workers), which
+    `b2d bench replay` reports."""
     with h5py.File(replay_path, "r") as src:
-        raw_like = _RawView(src)
-        qpos = src["qpos"][()]
-    scene = scene_for(raw_like, replay_path)
+        num_steps = src["qpos"].shape[0]
+    steps = frame_steps(num_steps, profile.rate_hz)[:max_frames]
+    if not steps.size:
+        raise ValueError(f"{replay_path}: no frames to render (max_frames={max_frames})")
+    parts = [p for p in np.array_split(steps, max(1, min(workers, len(steps) // MIN_FRAMES_PER_WORKER))) if p.size]
+    if len(parts) == 1:
+        stats = _render_steps(replay_path, profile, steps, out_path)
+    else:
+        stats = _render_parts(replay_path, profile, parts, out_path)
+    return {"frames": int(len(steps)), "frame_errors": stats["errors"], "profile": profile.name,
+            "profile_hash": profile.content_hash, "workers": len(parts), "seconds": stats["seconds"]}
+
+
+MIN_FRAMES_PER_WORKER = 8    # below this, starting a process and a renderer costs more than it saves
+
+
+def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, out_path: Path) -> dict:
+    """Render the given control steps of a replay into one render file."""
+    clock = time.perf_counter
+    t0 = clock()
+    with h5py.File(replay_path, "r") as src:
+        scene = scene_for(_RawView(src), replay_path)
+        qpos = src["qpos"][int(steps[0]): int(steps[-1]) + 1]
     model = scene.model
     data = mujoco.MjData(model)
-    steps = frame_steps(qpos.shape[0], profile.rate_hz)[:max_frames]
-    rig = CameraRig(model, profile)
-    static = {f"cameras/{cam}/intrinsic": K for cam, K in rig.intrinsics().items()}
-    for cam in profile.camera_ids:
-        static[f"cameras/{cam}/camera_model"] = schema.CAMERA_MODEL
-        static[f"cameras/{cam}/depth_semantics"] = schema.DEPTH_SEMANTICS
-        static[f"cameras/{cam}/clip_range_m"] = np.array([profile.clip_near_m, profile.clip_far_m])
-    static["render/frame_steps"] = steps
-    tactile = TactileFrames(scene, profile) if profile.tactile_enabled else None
-    if tactile is not None:   # tactile comes from the same posed state as the images (paper: same pass)
-        static.update(tactile.static())
+    renderer = FrameRenderer(scene, profile)
+    seconds = {"setup": clock() - t0, "pose": 0.0, "write": 0.0}
     errors = 0
-    with EpisodeWriter(out_path, static) as writer:
-        writer.file.attrs.update({"schema": RENDER_SCHEMA, "profile": profile.name,
-                                  "profile_hash": profile.content_hash})
-        for step in steps:
-            set_positions(model, data, qpos[step])
-            frame, error = {}, ""
-            try:
-                shots = rig.capture(data)
-            except Exception as exc:   # keep the episode: flag the frame instead of aborting
-                error, shots = f"render failed: {exc}", _blank_shots(profile)
-            for cam, T in rig.extrinsics(data).items():
-                frame[f"cameras/{cam}/extrinsic_world_from_cam"] = T
-                for key, img in shots[cam].items():
-                    frame[f"cameras/{cam}/{key}"] = img
-            if tactile is not None:
-                touch, touch_error = tactile.capture(data)
-                frame.update(touch)
-                error = "; ".join(e for e in (error, touch_error) if e)
-            errors += bool(error)
-            frame["render/frame_errors"] = error
-            writer.append(frame)
-    rig.close()
-    return {"frames": int(len(steps)), "frame_errors": errors, "profile": profile.name,
-            "profile_hash": profile.content_hash}
+    try:
+        with EpisodeWriter(out_path, {**renderer.static(), "render/frame_steps": steps}) as writer:
+            writer.file.attrs.update({"schema": RENDER_SCHEMA, "profile": profile.name,
+                                      "profile_hash": profile.content_hash})
+            for step in steps:
+                t0 = clock()
+                set_positions(model, data, qpos[step - steps[0]])
+                t1 = clock()
+                frame, error = renderer.capture(data)
+                errors += bool(error)
+                frame["render/frame_errors"] = error
+                t2 = clock()
+                writer.append(frame)
+                seconds["pose"] += t1 - t0
+                seconds["write"] += clock() - t2
+            t0 = clock()
+        seconds["write"] += clock() - t0    # closing flushes the last chunks
+    finally:
+        renderer.close()
+    return {"errors": errors, "seconds": {**seconds, **renderer.seconds()}}
 
 
-def _blank_shots(profile: SensorProfile) -> dict:
-    h, w = profile.height, profile.width
-    return {cam: {"rgb": np.zeros((h, w, 3), np.uint8), "depth_m": np.zeros((h, w), np.float32)}
-            for cam in profile.camera_ids}
+def _render_parts(replay_path: Path, profile: SensorProfile, parts: list[np.ndarray], out_path: Path) -> dict:
+    import multiprocessing
+    import tempfile
+    from concurrent.futures import ProcessPoolExecutor
+
+    with tempfile.TemporaryDirectory(dir=out_path.parent if out_path.parent.exists() else None) as tmp:
+        part_paths = [Path(tmp) / f"part{i:03d}.render.h5" for i in range(len(parts))]
+        # spawn, not fork: a forked child would inherit the parent's GL context and h5py state
+        with ProcessPoolExecutor(len(parts), mp_context=multiprocessing.get_context("spawn")) as pool:
+            stats = list(pool.map(_render_steps, [replay_path] * len(parts), [profile] * len(parts),
+                                  parts, part_paths))
+        t0 = time.perf_counter()
+        concat_frames(part_paths, out_path, frame_axis_datasets=("render/frame_steps",))
+    seconds: dict[str, float] = {"join": time.perf_counter() - t0}
+    for s in stats:
+        for key, value in s["seconds"].items():
+            seconds[key] = seconds.get(key, 0.0) + value
+    return {"errors": sum(s["errors"] for s in stats), "seconds": seconds}
 
 
 class _RawView:
@@ -144,6 +176,8 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
         metrics = json.loads(attrs["episode_metrics"])
         fidelity = json.loads(attrs["fidelity"])
         object_names = json.loads(attrs["object_names"])
+        joint_names = json.loads(attrs["articulated_joint_names"])
+        joints_by_object = _joints_by_object(joint_names)
         success_step = metrics.get("steps_to_stable")   # 1-based count of updates
         drift = rep["drift_flags"][()]
         T = len(steps)
@@ -151,7 +185,10 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
         if profile.tactile_enabled and not has_tactile:
             raise SpecError(render_path, schema.TACTILE_ROOT,
                             f"tactile frames (profile '{profile.name}' enables tactile; re-render)")
-        modalities = ["rgb", "depth", "robot_state", "object_state"] + (["tactile"] if has_tactile else [])
+        labels = [m for m in schema.LABEL_MODALITIES if m in profile.modalities]
+        if labels and schema.LABEL_ID_NODES[0].path not in ren:
+            raise SpecError(render_path, "labels", f"label frames (profile '{profile.name}' lists {labels}; re-render)")
+        modalities = ["rgb", "depth", "robot_state", "object_state"] + (["tactile"] if has_tactile else []) + labels
         static = {
             "meta/task": task.name, "meta/embodiment": attrs["embodiment"], "meta/instruction": task.instruction,
             "meta/scene": attrs["scene_sample"], "meta/modalities": json.dumps(modalities),
@@ -170,6 +207,8 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
             "action/control_mode": schema.CONTROL_MODE, "action/action_type": schema.ACTION_TYPE,
             "robot/joint_names": json.loads(attrs["robot_joint_names"]),
             "metrics/episode": json.dumps(metrics, sort_keys=True),
+            **{f"objects/{name}/joint_names": [joint_names[c] for c in columns]
+               for name, columns in joints_by_object.items()},
         }
         with EpisodeWriter(out_path, static) as writer:
             for k, step in enumerate(steps):
@@ -190,11 +229,16 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
                     frame[f"objects/{name}/pose_world"] = rep["object_pose"][step, i]
                     frame[f"objects/{name}/lin_vel_world"] = rep["object_lin_vel"][step, i]
                     frame[f"objects/{name}/ang_vel_world"] = rep["object_ang_vel"][step, i]
+                for name, columns in joints_by_object.items():
+                    for key in ("qpos", "qvel", "qeffort"):
+                        frame[f"objects/{name}/{key}"] = rep[f"joint_{key}"][step, columns]
                 writer.append(frame)
             for cam in profile.camera_ids:
                 writer.file.copy(ren[f"cameras/{cam}"], f"cameras/{cam}")
             if has_tactile:
                 writer.file.copy(ren[schema.TACTILE_ROOT], schema.TACTILE_ROOT)
+            if labels:
+                writer.file.copy(ren["labels"], "labels")
             for key, ds in rep["traces"].items():
                 writer.file.copy(ds, f"metrics/timeseries/{key}")
             writer.file.create_dataset("metrics/timeseries/sim_step", data=np.arange(1, rep["action"].shape[0] + 1))
@@ -202,16 +246,25 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
             "sha256": file_sha256(out_path), "bytes": out_path.stat().st_size}
 
 
+def _joints_by_object(joint_names: list[str]) -> dict[str, list[int]]:
+    """Articulated joints ("<object>/<link>") grouped by object: {object: [column, ...]}."""
+    groups: dict[str, list[int]] = {}
+    for column, joint in enumerate(joint_names):
+        groups.setdefault(joint.split("/")[0], []).append(column)
+    return groups
+
+
 def raw_to_episode(raw_path: Path, profile: SensorProfile, out_dir: Path, work_dir: Path | None = None,
-                   max_frames: int | None = None) -> Path:
+                   max_frames: int | None = None, workers: int = 1,
+                   drift_bound_m: float = DEFAULT_DRIFT_BOUND_M) -> Path:
     """All three stages for one recording (the `b2d replay` command)."""
     raw_path, out_dir = Path(raw_path), Path(out_dir)
     work = Path(work_dir or out_dir / ".work")
     stem = raw_path.name.removesuffix(".raw.h5")
     replay_path = work / f"{stem}.replay.h5"
     render_path = work / f"{stem}.{profile.content_hash}.render.h5"
-    replay_to_file(raw_path, replay_path)
-    render_to_file(replay_path, profile, render_path, max_frames=max_frames)
+    replay_to_file(raw_path, replay_path, drift_bound_m=drift_bound_m)
+    render_to_file(replay_path, profile, render_path, max_frames=max_frames, workers=workers)
     episode_id = stem.removeprefix("episode_")
     out_path = out_dir / schema.episode_filename(episode_id)
     assemble_episode(replay_path, render_path, profile, out_path)

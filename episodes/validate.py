@@ -11,7 +11,7 @@ import numpy as np
 
 from episodes import schema
 
-_KIND = {"uint8": "u", "float32": "f", "float64": "f", "int64": "i", "bool": "b", "str": "O"}
+_KIND = {"uint8": "u", "uint16": "u", "float32": "f", "float64": "f", "int64": "i", "bool": "b", "str": "O"}
 
 
 def _check_node(f: h5py.File, base: str, node: schema.Node, dims: dict, problems: list[str]) -> None:
@@ -29,7 +29,7 @@ def _check_node(f: h5py.File, base: str, node: schema.Node, dims: dict, problems
         problems.append(f"{path}: expected a dataset")
         return
     kind = obj.dtype.kind if obj.dtype.kind != "S" else "O"
-    if node.dtype and kind != _KIND[node.dtype] or (node.dtype in ("uint8", "float32") and obj.dtype != np.dtype(node.dtype)):
+    if node.dtype and kind != _KIND[node.dtype] or (node.dtype in ("uint8", "uint16", "float32") and obj.dtype != np.dtype(node.dtype)):
         problems.append(f"{path}: dtype {obj.dtype}, expected {node.dtype}")
     if node.shape is None:
         return
@@ -73,9 +73,14 @@ def validate_episode(path: str | Path) -> list[str]:
                     continue
                 _check_node(f, f"cameras/{cam}/", node, cam_dims, problems)
         _check_tactile(f, dims, modalities, problems)
+        _check_labels(f, dims, modalities, cameras, problems)
         for obj in (list(f["objects"].keys()) if "objects" in f else []):
+            obj_dims = dict(dims)
             for node in schema.OBJECT_NODES:
-                _check_node(f, f"objects/{obj}/", node, dict(dims), problems)
+                _check_node(f, f"objects/{obj}/", node, obj_dims, problems)
+            articulated = any(f"objects/{obj}/{n.path}" in f for n in schema.OBJECT_JOINT_NODES)
+            for node in schema.OBJECT_JOINT_NODES if articulated else ():
+                _check_node(f, f"objects/{obj}/", node, obj_dims, problems)
         if "metrics/episode" in f:
             try:
                 json.loads(f["metrics/episode"][()])
@@ -147,3 +152,83 @@ def _profile_enables_tactile(f: h5py.File) -> bool:
         return bool(config["profile"]["tactile"]["enabled"])
     except (KeyError, ValueError, TypeError):
         return False
+
+
+def _check_labels(f: h5py.File, dims: dict, modalities: list[str], cameras: list[str], problems: list[str]) -> None:
+    """Segmentation, 2D/3D boxes and occupancy: each required when meta/modalities or the collection
+    profile lists it; one present but not listed in meta/modalities is reported too."""
+    profile = _profile_modalities(f)
+    present = {"segmentation": any(f"cameras/{cam}/{n.path}" in f for cam in cameras
+                                   for n in schema.SEGMENTATION_CAMERA_NODES),
+               "box2d": "labels/box2d" in f, "box3d": "labels/box3d" in f, "occupancy": schema.OCCUPANCY_ROOT in f}
+    wanted = [m for m in schema.LABEL_MODALITIES if m in modalities or m in profile]
+    for m in schema.LABEL_MODALITIES:
+        if present[m] and m not in modalities:
+            problems.append(f"meta/modalities: expected '{m}' in the list, since its labels are present")
+    if not wanted:
+        return
+    for node in schema.LABEL_ID_NODES:
+        _check_node(f, "", node, dict(dims), problems)
+    objects = _label_objects(f, problems)
+    if "segmentation" in wanted:
+        for cam in cameras:
+            cam_dims = dict(dims)
+            image = next((f[f"cameras/{cam}/{k}"] for k in ("rgb", "depth_m") if f"cameras/{cam}/{k}" in f), None)
+            if isinstance(image, h5py.Dataset) and image.ndim >= 3:   # masks match the camera's H, W
+                cam_dims.update(H=image.shape[1], W=image.shape[2])
+            for node in schema.SEGMENTATION_CAMERA_NODES:
+                _check_node(f, f"cameras/{cam}/", node, cam_dims, problems)
+    if "box2d" in wanted:
+        _check_node(f, "", schema.BOX2D_SEMANTICS_NODE, dict(dims), problems)
+        _check_keys(f, "labels/box2d", cameras, "cameras/", problems)
+        for cam in cameras:
+            _check_keys(f, f"labels/box2d/{cam}", objects, "labels/instances", problems)
+            for obj in objects:
+                for node in schema.BOX2D_NODES:
+                    _check_node(f, f"labels/box2d/{cam}/{obj}/", node, dict(dims), problems)
+    if "box3d" in wanted:
+        _check_keys(f, "labels/box3d", objects, "labels/instances", problems)
+        for obj in objects:
+            for node in schema.BOX3D_NODES:
+                _check_node(f, f"labels/box3d/{obj}/", node, dict(dims), problems)
+    if "occupancy" in wanted:
+        occ_dims = dict(dims)
+        for node in schema.OCCUPANCY_NODES:
+            _check_node(f, "", node, occ_dims, problems)
+        root = schema.OCCUPANCY_ROOT
+        try:
+            shape = [int(v) for v in f[f"{root}/grid_shape"][()]]
+            stored = [occ_dims.get(axis) for axis in ("X", "Y", "Z")]
+            if None not in stored and shape != stored:
+                problems.append(f"{root}/grid_shape: {shape}, expected the stored grid's {stored}")
+            json.loads(f[f"{root}/semantics"][()])
+        except (KeyError, ValueError, TypeError):
+            problems.append(f"{root}/: expected an integer grid_shape [X, Y, Z] and a JSON semantics document")
+
+
+def _label_objects(f: h5py.File, problems: list[str]) -> list[str]:
+    """Object ids of labels/instances, in instance order."""
+    try:
+        instances = json.loads(f["labels/instances"][()])
+        return [instances[k]["name"] for k in sorted(instances, key=int)]
+    except (KeyError, ValueError, TypeError):
+        problems.append("labels/instances: expected a JSON object {id: {name, category, semantic_id}}")
+        return []
+
+
+def _check_keys(f: h5py.File, group: str, expected: list[str], source: str, problems: list[str]) -> None:
+    """A label group's members must be exactly the cameras / objects the episode declares."""
+    members = set(f[group]) if isinstance(f.get(group), h5py.Group) else set()
+    missing, extra = sorted(set(expected) - members), sorted(members - set(expected))
+    if missing:
+        problems.append(f"{group}/: missing {missing} (listed in {source})")
+    if extra:
+        problems.append(f"{group}/: {extra} are not listed in {source}")
+
+
+def _profile_modalities(f: h5py.File) -> list[str]:
+    try:
+        config = json.loads(f["meta/collection_config"][()])
+        return list(config["profile"]["cameras"].get("modalities", []))
+    except (KeyError, ValueError, TypeError, AttributeError):
+        return []

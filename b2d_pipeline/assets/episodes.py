@@ -16,7 +16,7 @@ def build(settings: FactorySettings):
     profile = settings.profile
 
     @dg.asset(partitions_def=settings_partitions, group_name="episodes", deps=["replays", "renders"],
-              code_version=f"2-{profile.content_hash}",   # 2: robot/tactile copied from the renders
+              code_version=f"3-{profile.content_hash}",   # 3: schema b2d.episode/2 (labels, joints, distractors)
               description="Synchronized multimodal episodes (meta, time, action, cameras, robot incl. tactile, "
                           "objects, metrics).")
     def episodes(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:

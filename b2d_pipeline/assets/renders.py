@@ -15,8 +15,9 @@ def build(settings: FactorySettings):
 
     # The profile hash in the code version: a changed profile marks renders (and downstream) stale.
     # 2: renders carry the tactile frames (robot/tactile) when the profile enables them.
+    # 3: labels (segmentation, 2D/3D boxes, occupancy) as the profile lists them.
     @dg.asset(partitions_def=settings_partitions, group_name="renders", deps=["replays"],
-              code_version=f"2-{profile.content_hash}",
+              code_version=f"3-{profile.content_hash}",
               description=f"Camera and tactile renders under the '{profile.name}' sensor profile "
                           f"({profile.content_hash}).")
     def renders(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
@@ -25,7 +26,7 @@ def build(settings: FactorySettings):
         for rep in sorted(store.replay_dir(key).glob("*.replay.h5")):
             out = store.render_dir(profile.content_hash, key) / rep.name.replace(".replay.h5", ".render.h5")
             try:
-                info = render_to_file(rep, profile, out)
+                info = render_to_file(rep, profile, out, workers=settings.render_workers)
                 frames += info["frames"]
                 paths.append(out)
             except Exception as exc:

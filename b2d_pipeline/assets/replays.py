@@ -10,7 +10,8 @@ from episodes.stages import replay_to_file
 
 
 def build():
-    @dg.asset(partitions_def=settings_partitions, group_name="replays", code_version="1", deps=["raw_recordings"],
+    # 2: replays also store distractor states and articulated-object joint states.
+    @dg.asset(partitions_def=settings_partitions, group_name="replays", code_version="2", deps=["raw_recordings"],
               description="Seeded re-simulation of every raw recording; profile-independent.")
     def replays(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key

@@ -1,0 +1,80 @@
+"""Join HDF5 files that hold consecutive frame ranges of one episode into one file.
+
+Per-frame datasets (extendable along axis 0, as `EpisodeWriter` makes them) are concatenated; the
+rest (intrinsics, surface maps, names) is the same in every part and copied once. Image chunks hold
+one frame, so they are copied as compressed bytes (`read_direct_chunk`), never decoded and
+recompressed: joining costs little next to rendering.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from episodes.atomic import atomic_path
+
+
+def _datasets(f: h5py.File) -> dict[str, h5py.Dataset]:
+    found: dict[str, h5py.Dataset] = {}
+
+    def keep(name, obj) -> None:    # must return None: visititems stops at the first other value
+        if isinstance(obj, h5py.Dataset):
+            found[name] = obj
+
+    f.visititems(keep)
+    return found
+
+
+def concat_frames(parts: list[Path], out_path: Path, frame_axis_datasets: tuple[str, ...] = ()) -> None:
+    """Write `out_path` (atomically) as the frame-wise concatenation of `parts`, in order.
+
+    `frame_axis_datasets` names fixed-size datasets that nevertheless run along the frame axis
+    (e.g. the frame step index) and must be concatenated too."""
+    if not parts:
+        raise ValueError(f"{out_path}: no parts to join")
+    files: list[h5py.File] = []
+    try:
+        for p in parts:     # opened inside the try: a part that fails to open closes the others
+            files.append(h5py.File(p, "r"))
+        first = _datasets(files[0])
+        per_part = [_datasets(f) for f in files]
+        for path, sets in zip(parts, per_part):
+            if sets.keys() != first.keys():
+                missing = sorted(first.keys() ^ sets.keys())
+                raise ValueError(f"{path}: datasets differ from {parts[0].name}: {missing[:5]}")
+            # chunks are copied as raw bytes: a different dtype or frame shape would be misread
+            odd = [n for n, ds in sets.items() if ds.dtype != first[n].dtype or ds.shape[1:] != first[n].shape[1:]]
+            if odd:
+                raise ValueError(f"{path}: dtype or frame shape differs from {parts[0].name} in {odd[:5]}")
+        with atomic_path(out_path) as tmp, h5py.File(tmp, "w") as out:
+            out.attrs.update(dict(files[0].attrs))
+            for name, ds in first.items():
+                if (ds.ndim and ds.maxshape[0] is None) or name in frame_axis_datasets:
+                    _concat(out, name, [sets[name] for sets in per_part])
+                else:
+                    files[0].copy(ds, out, name=name)
+    finally:
+        for f in files:
+            f.close()
+
+
+def _concat(out: h5py.File, name: str, sources: list[h5py.Dataset]) -> None:
+    src = sources[0]
+    total = sum(s.shape[0] for s in sources)
+    dst = out.create_dataset(name, shape=(total, *src.shape[1:]), maxshape=(None, *src.shape[1:]),
+                             dtype=src.dtype, chunks=src.chunks or True, compression=src.compression,
+                             compression_opts=src.compression_opts, shuffle=src.shuffle)
+    one_frame_chunks = src.chunks is not None and src.chunks[0] == 1
+    start = 0
+    for s in sources:
+        n = s.shape[0]
+        if one_frame_chunks and s.chunks == src.chunks and s.compression == src.compression:
+            tail = (0,) * (len(s.shape) - 1)
+            for i in range(n):
+                mask, chunk = s.id.read_direct_chunk((i, *tail))
+                dst.id.write_direct_chunk((start + i, *tail), chunk, mask)
+        else:
+            dst[start:start + n] = s[()] if n else np.empty((0, *s.shape[1:]), s.dtype)
+        start += n

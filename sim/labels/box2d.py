@@ -1,0 +1,119 @@
+"""2D boxes per camera and object, from the instance mask, with a cheap visibility fraction.
+
+Box (`xyxy`, float32 pixels): the box of the object's visible pixels in the instance mask, in
+pixel-edge coordinates, the frame of the stored intrinsics (cx = W/2): pixel (u, v) covers
+[u, u+1) x [v, v+1), so x1, y1 are inclusive (the first column / row showing the object) and x2, y2
+exclusive (last column / row + 1). The box is modal: it covers what the camera sees, clipped to the
+image. An object with no visible pixel has xyxy = NaN and visibility 0.
+
+Visibility (float32 in [0, 1]): the fraction of the object's surface that the camera sees, taken
+from a fixed set of area-uniform surface samples (`SAMPLES_PER_OBJECT`, seeded, in each geom's
+frame). A sample counts as seen when it lies in front of the camera, projects into the image, and the
+instance mask shows the object at its pixel or a 4-neighbour (one pixel of rasterisation slack).
+Samples on the far side of the object project inside its own silhouette, so an unoccluded object
+inside the image scores about 1; occluders and the image border lower it. It needs no second
+render and costs one projection of the samples per camera.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import trimesh
+from scipy import ndimage
+
+from sim.labels.geometry import GeomShapes, check_solid
+from sim.labels.ids import LabelIds
+from sim.render import MJ_TO_CV, intrinsic_matrix
+
+SAMPLES_PER_OBJECT = 256
+SAMPLE_SEED = 0
+_NEIGHBOURS = np.array([(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)])
+
+
+@dataclass(frozen=True)
+class Boxes2D:
+    xyxy: np.ndarray          # [N, 4] float32, NaN rows for objects not visible
+    visibility: np.ndarray    # [N] float32
+    pixels: np.ndarray        # [N] int64 visible pixel count
+
+
+def mask_boxes(instance: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
+    """xyxy [count, 4] (NaN when absent) and pixel counts [count] of instances 1..count."""
+    xyxy = np.full((count, 4), np.nan, np.float32)
+    for k, found in enumerate(ndimage.find_objects(instance, max_label=count)):
+        if found is not None:
+            rows, cols = found
+            xyxy[k] = (cols.start, rows.start, cols.stop, rows.stop)
+    pixels = np.bincount(instance.ravel(), minlength=count + 1)[1:count + 1]
+    return xyxy, pixels.astype(np.int64)
+
+
+def camera_projection(model: mujoco.MjModel, data: mujoco.MjData, camera: int, width: int, height: int):
+    """Intrinsics K [3, 3] and camera-from-world (R [3, 3], t [3]) in the OpenCV camera frame."""
+    K = intrinsic_matrix(float(model.cam_fovy[camera]), width, height)
+    world_from_cam = data.cam_xmat[camera].reshape(3, 3) @ MJ_TO_CV
+    return K, world_from_cam.T, -world_from_cam.T @ data.cam_xpos[camera]
+
+
+class SurfaceSamples:
+    """Area-uniform surface points of every object, each held in the frame of the geom it lies on."""
+
+    def __init__(self, model: mujoco.MjModel, ids: LabelIds, shapes: GeomShapes | None = None,
+                 per_object: int = SAMPLES_PER_OBJECT, seed: int = SAMPLE_SEED):
+        shapes = shapes or GeomShapes(model)
+        geoms, points, owner = [], [], []
+        for inst in range(1, len(ids.instance_names)):
+            mine = ids.instance_geoms(inst)
+            if not len(mine):
+                raise ValueError(f"object '{ids.instance_names[inst]}' has no geoms to sample")
+            check_solid(model, mine)
+            meshes = [shapes.surface(int(g)) for g in mine]
+            face_geom = np.repeat(mine, [len(m.faces) for m in meshes])
+            pts, faces = trimesh.sample.sample_surface(trimesh.util.concatenate(meshes), per_object, seed=seed)
+            geoms.append(face_geom[faces])
+            points.append(pts)
+            owner.append(np.full(per_object, inst))
+        self.geom = np.concatenate(geoms) if geoms else np.zeros(0, int)
+        self.local = np.concatenate(points) if points else np.zeros((0, 3))
+        self.instance = np.concatenate(owner) if owner else np.zeros(0, int)
+        self.count = len(ids.instance_names) - 1
+        self.per_object = per_object
+
+    def world(self, data: mujoco.MjData) -> np.ndarray:
+        rot = data.geom_xmat[self.geom].reshape(-1, 3, 3)
+        return data.geom_xpos[self.geom] + np.einsum("nij,nj->ni", rot, self.local)
+
+
+class Box2DLabeler:
+    """``capture(data, camera, instance_mask)`` -> `Boxes2D` of every object for that camera."""
+
+    def __init__(self, model: mujoco.MjModel, ids: LabelIds, shapes: GeomShapes | None = None,
+                 per_object: int = SAMPLES_PER_OBJECT):
+        self.model = model
+        self.ids = ids
+        self.samples = SurfaceSamples(model, ids, shapes, per_object)
+
+    def capture(self, data: mujoco.MjData, camera: int | str, instance: np.ndarray) -> Boxes2D:
+        cam = camera if isinstance(camera, (int, np.integer)) else self.model.camera(camera).id
+        height, width = instance.shape
+        n = self.samples.count
+        xyxy, pixels = mask_boxes(instance, n)
+        K, R, t = camera_projection(self.model, data, int(cam), width, height)
+        pc = self.samples.world(data) @ R.T + t
+        z = pc[:, 2]
+        ahead = z > 1e-9
+        safe_z = np.where(ahead, z, 1.0)
+        u = np.floor(K[0, 0] * pc[:, 0] / safe_z + K[0, 2]).astype(np.int64)
+        v = np.floor(K[1, 1] * pc[:, 1] / safe_z + K[1, 2]).astype(np.int64)
+        inside = ahead & (u >= 0) & (u < width) & (v >= 0) & (v < height)
+        seen = np.zeros(len(z), bool)
+        inst = self.samples.instance
+        for du, dv in _NEIGHBOURS:
+            uu, vv = np.clip(u + du, 0, width - 1), np.clip(v + dv, 0, height - 1)
+            seen |= instance[vv, uu] == inst
+        seen &= inside
+        fraction = np.bincount(inst[seen], minlength=n + 1)[1:] / float(self.samples.per_object)
+        return Boxes2D(xyxy, fraction.astype(np.float32), pixels)

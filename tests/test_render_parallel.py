@@ -1,0 +1,135 @@
+"""Rendering split over processes gives the same arrays as one process; episodes of tasks with
+articulated objects carry the joint states (schema b2d.episode/2)."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from episodes.h5_concat import concat_frames
+from episodes.raw import write_raw
+from episodes.stages import assemble_episode, render_to_file, replay_to_file
+from episodes.validate import validate_episode
+from episodes.writer import EpisodeWriter
+from sim.registry import parse_sensor_profile
+from sim.scene.builder import build_scene
+from sim.scene.sample import demonstration_sample
+from sim.tasks import load_task
+from teleop.recorder import record_episode
+
+# Every control step rendered (60 Hz), two small cameras, coarse tactile: 18 frames for the 18-step raw.
+TINY = {"name": "tiny", "rate_hz": 60,
+        "cameras": {"ids": ["chest", "right_wrist"], "width": 32, "height": 24, "modalities": ["rgb", "depth"]},
+        "tactile": {"enabled": True, "resolution": 240, "step": 24}}
+
+
+def _arrays(path) -> dict[str, bytes]:
+    """Every dataset's content as bytes (strings by their repr)."""
+    out = {}
+
+    def grab(name, obj):
+        if isinstance(obj, h5py.Dataset):
+            value = obj[()]
+            out[name] = value.tobytes() if isinstance(value, np.ndarray) and value.dtype.kind != "O" else repr(value).encode()
+
+    with h5py.File(path) as f:
+        f.visititems(grab)
+    return out
+
+
+@pytest.fixture(scope="module")
+def replay_path(raw_path, tmp_path_factory):
+    out = tmp_path_factory.mktemp("replay") / "e.replay.h5"
+    replay_to_file(raw_path, out)
+    return out
+
+
+def test_two_workers_render_the_same_arrays_as_one(replay_path, tmp_path):
+    profile = parse_sensor_profile(TINY)
+    one = render_to_file(replay_path, profile, tmp_path / "one.render.h5", workers=1)
+    two = render_to_file(replay_path, profile, tmp_path / "two.render.h5", workers=2)
+    assert (one["workers"], two["workers"]) == (1, 2)
+    assert one["frames"] == two["frames"] == 18
+    a, b = _arrays(tmp_path / "one.render.h5"), _arrays(tmp_path / "two.render.h5")
+    assert a.keys() == b.keys()
+    assert "cameras/chest/rgb" in a and "robot/tactile/tacmap/right_index_tip" in a
+    differing = [k for k in a if a[k] != b[k]]
+    assert not differing
+
+
+def test_concat_rejects_parts_with_different_datasets(tmp_path):
+    with EpisodeWriter(tmp_path / "a.h5", {}) as w:
+        w.append({"x": np.zeros(3)})
+    with EpisodeWriter(tmp_path / "b.h5", {}) as w:
+        w.append({"y": np.zeros(3)})
+    with pytest.raises(ValueError, match="b.h5"):
+        concat_frames([tmp_path / "a.h5", tmp_path / "b.h5"], tmp_path / "out.h5")
+    assert not (tmp_path / "out.h5").exists()
+
+
+def test_concat_rejects_parts_whose_frames_differ_in_dtype(tmp_path):
+    """Image chunks are copied as raw bytes, so a part with another dtype must not be joined."""
+    for name, dtype in (("a.h5", np.float32), ("b.h5", np.float64)):
+        with EpisodeWriter(tmp_path / name, {}) as w:
+            w.append({"img": np.ones((32, 32), dtype)})
+    with pytest.raises(ValueError, match=r"b.h5: dtype or frame shape differs .*'img'"):
+        concat_frames([tmp_path / "a.h5", tmp_path / "b.h5"], tmp_path / "out.h5")
+    assert not (tmp_path / "out.h5").exists()
+
+
+class _HoldHome:
+    """An operator that keeps the robot at home: the door's joint state is still recorded."""
+    name = "hold_home"
+
+    def reset(self, scene, data):
+        self.ctrl = scene.layout.home_ctrl
+
+    def act(self, step, data):
+        return self.ctrl
+
+    def done(self, step):
+        return False
+
+
+def test_articulated_joint_states_and_distractors_reach_the_episode(tmp_path):
+    spec = load_task("microwave_bowl_loading")
+    scene = build_scene(spec, spec.paper_embodiment, demonstration_sample(spec, 7))
+    raw = write_raw(tmp_path / "episode_0000.raw.h5", record_episode(scene, _HoldHome(), "0000", 7, max_steps=6))
+    profile = parse_sensor_profile({**TINY, "tactile": {"enabled": False}})
+    replay_to_file(raw, tmp_path / "r.h5")
+    render_to_file(tmp_path / "r.h5", profile, tmp_path / "v.h5")
+    episode = tmp_path / "episode_0000.hdf5"
+    assemble_episode(tmp_path / "r.h5", tmp_path / "v.h5", profile, episode)
+    assert validate_episode(episode) == []
+    with h5py.File(episode) as f:
+        names = [n.decode() for n in f["objects/microwave/joint_names"][()]]
+        assert names == [j for j in scene.joint_names if j.startswith("microwave/")] and names
+        assert f["objects/microwave/qpos"].shape == (6, len(names))
+        door = names.index("microwave/door")
+        assert np.allclose(f["objects/microwave/qpos"][:, door], scene.joint_initial["microwave/door"], atol=1e-3)
+        assert {f"objects/{d}/pose_world" for d in scene.distractor_names} <= set(_arrays(episode))
+    # a missing articulated node is reported by name
+    with h5py.File(episode, "a") as f:
+        del f["objects/microwave/qvel"]
+    assert any("objects/microwave/qvel: missing" in p for p in validate_episode(episode))
+
+
+def test_frames_drifting_from_the_recording_are_flagged_not_dropped(raw_path, tmp_path):
+    from episodes.stages import raw_to_episode
+
+    edited = tmp_path / "episode_0009.raw.h5"
+    edited.write_bytes(raw_path.read_bytes())
+    with h5py.File(edited, "a") as f:      # the recording claims lemon_1 was 2 cm higher from step 9 on
+        f["object_pose"][9:, 0, 2] += 0.02
+    profile = parse_sensor_profile({**TINY, "tactile": {"enabled": False}})
+    episode = raw_to_episode(edited, profile, tmp_path / "out", drift_bound_m=0.01)
+    with h5py.File(episode) as f:
+        valid = f["frame_valid"][()]
+        errors = [e.decode() for e in f["frame_errors"][()]]
+        steps = f["time/sim_step"][()] - 1
+        fidelity = json.loads(f["meta/replay_fidelity"][()])
+    assert valid.size == 18 and np.array_equal(valid, steps < 9)
+    assert all("replay drift beyond bound" in e for e, s in zip(errors, steps) if s >= 9)
+    assert fidelity["frames_over_bound"] == 9 and fidelity["drift_bound_m"] == 0.01
+    assert not fidelity["bit_exact"]
