@@ -9,15 +9,24 @@ Only public MuJoCo API is used; the depth conversion follows `mujoco.Renderer`'s
 
 from __future__ import annotations
 
+import importlib
 import os
 
-os.environ.setdefault("MUJOCO_GL", "egl")
-
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
-from mujoco import gl_context  # noqa: E402
+import mujoco
+import numpy as np
 
 _FLAGS = mujoco.mjtRndFlag
+GL_BACKENDS = {"egl": "mujoco.egl", "osmesa": "mujoco.osmesa", "glfw": "mujoco.glfw"}
+
+
+def gl_context_class():
+    """The GL backend named by MUJOCO_GL (default egl: headless), resolved when a renderer is made.
+    `mujoco.gl_context` is fixed when mujoco is first imported, which in the CLI happens before any
+    of our modules could set a default: without MUJOCO_GL it picked GLFW and failed with no display."""
+    backend = os.environ.setdefault("MUJOCO_GL", "egl").lower()
+    if backend not in GL_BACKENDS:
+        raise ValueError(f"MUJOCO_GL={backend!r}: expected one of {sorted(GL_BACKENDS)}")
+    return importlib.import_module(GL_BACKENDS[backend]).GLContext
 
 
 class OffscreenRenderer:
@@ -26,7 +35,7 @@ class OffscreenRenderer:
             raise ValueError(f"image {width}x{height} exceeds the model's offscreen buffer "
                              f"{model.vis.global_.offwidth}x{model.vis.global_.offheight} (visual/global offwidth)")
         self.model, self.width, self.height = model, width, height
-        self._gl = gl_context.GLContext(width, height)
+        self._gl = gl_context_class()(width, height)
         self._gl.make_current()
         self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)

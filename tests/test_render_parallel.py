@@ -133,3 +133,24 @@ def test_frames_drifting_from_the_recording_are_flagged_not_dropped(raw_path, tm
     assert all("replay drift beyond bound" in e for e, s in zip(errors, steps) if s >= 9)
     assert fidelity["frames_over_bound"] == 9 and fidelity["drift_bound_m"] == 0.01
     assert not fidelity["bit_exact"]
+
+
+def test_rendering_works_when_mujoco_was_imported_before_any_gl_default(tmp_path):
+    """The CLI imports mujoco before sim.offscreen could set MUJOCO_GL; rendering must still go headless."""
+    import os
+    import subprocess
+    import sys
+
+    code = ("import mujoco, numpy as np\n"
+            "m = mujoco.MjModel.from_xml_string('<mujoco><worldbody><light pos=\"0 0 2\"/><camera name=\"c\" pos=\"0 0 1\"/>"
+            "<geom size=\"0.1\"/></worldbody></mujoco>')\n"
+            "d = mujoco.MjData(m); mujoco.mj_forward(m, d)\n"
+            "from sim.offscreen import OffscreenRenderer\n"
+            "r = OffscreenRenderer(m, 32, 24); r.update(d, 0)\n"
+            "depth, ids = r.depth_and_geoms(True)\n"
+            "print(round(float(depth[12, 16]), 3), int(ids[12, 16]))\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    depth, geom = out.stdout.split()
+    assert abs(float(depth) - 0.9) < 0.01 and geom == "0"    # camera 1 m above a 0.1 m sphere at the origin
