@@ -18,15 +18,9 @@ def tactile() -> None:
 
 def frame_tacmaps(path: Path, frame: int) -> tuple[dict, str, int]:
     """({site: uint8 tacmap}, title, sites per row) of one frame; SpecError names the file and field."""
-    from episodes.reader import EpisodeReader
+    from episodes.reader import open_episode
 
-    if not path.is_file():
-        raise SpecError(path, "<file>", "an existing HDF5 episode file")
-    try:
-        reader = EpisodeReader(path)
-    except OSError as exc:
-        raise SpecError(path, "<file>", "a readable HDF5 episode (file is truncated or not HDF5)") from exc
-    with reader:
+    with open_episode(path) as reader:
         sites = reader.tactile_sites
         if not sites:
             raise SpecError(path, schema.TACTILE_ROOT, "tactile frames (this episode was written without tactile)")

@@ -11,10 +11,11 @@ from pathlib import Path
 import mujoco
 
 from episode_media.qpos import episode_qpos
-from episode_media.source import episode_scene, frame_range, open_episode
+from episode_media.source import episode_scene, frame_range
 from episode_media.strip import EpisodeFrames, show_episode
 from episode_media.usd_export import export_usd
 from episodes import schema
+from episodes.reader import open_episode
 from sim.render import set_positions
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"

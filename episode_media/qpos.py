@@ -13,8 +13,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from episode_media.source import FrameRange, open_episode
-from episodes.reader import EpisodeReader
+from episode_media.source import FrameRange
+from episodes.reader import EpisodeReader, open_episode
 from sim.errors import SpecError
 
 _FREE = int(mujoco.mjtJoint.mjJNT_FREE)

@@ -13,30 +13,6 @@ from episodes import schema
 from episodes.reader import EpisodeReader
 from sim.errors import SpecError
 
-EPISODE_SCHEMA_FAMILY = schema.SCHEMA_VERSION.rsplit("/", 1)[0] + "/"
-
-
-def open_episode(path: str | Path) -> EpisodeReader:
-    """An EpisodeReader on a b2d episode; SpecError for a missing, non-HDF5 or non-episode file."""
-    path = Path(path)
-    if not path.is_file():
-        raise SpecError(path, "<file>", "an existing HDF5 episode file")
-    try:
-        reader = EpisodeReader(path)
-    except OSError as exc:
-        raise SpecError(path, "<file>", "a readable HDF5 episode (file is truncated or not HDF5)") from exc
-    # any version of the layout: what each command needs is checked node by node when it is read
-    version = reader.static("meta/schema_version") if "meta/schema_version" in reader else None
-    if not (isinstance(version, str) and version.startswith(EPISODE_SCHEMA_FAMILY)):
-        reader.close()
-        raise SpecError(path, "meta/schema_version", f"'{schema.SCHEMA_VERSION}' or another "
-                                                     f"'{EPISODE_SCHEMA_FAMILY}' version (a b2d episode)", version)
-    if "time/frame_index" not in reader:
-        reader.close()
-        raise SpecError(path, "time/frame_index", "a dataset [T] (the episode's frames)")
-    return reader
-
-
 @dataclass(frozen=True)
 class FrameRange:
     """Frames start, start + stride, ... below stop (Python slice semantics)."""

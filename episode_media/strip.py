@@ -13,10 +13,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from episodes.atomic import atomic_path
-from episode_media.source import FrameRange, frame_range, frame_rate_hz, open_episode
+from episode_media.source import FrameRange, frame_range, frame_rate_hz
 from episodes import schema
-from episodes.reader import EpisodeReader
+from episodes.atomic import atomic_path
+from episodes.reader import EpisodeReader, open_episode
 from sim.errors import SpecError
 from tactile.heatmap import tacmap_panel
 

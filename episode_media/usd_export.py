@@ -18,7 +18,8 @@ import mujoco
 
 from episode_media.atomic import atomic_dir
 from episode_media.qpos import episode_qpos
-from episode_media.source import episode_scene, frame_range, frame_rate_hz, open_episode
+from episode_media.source import episode_scene, frame_range, frame_rate_hz
+from episodes.reader import open_episode
 from sim.errors import SpecError
 from sim.render import set_positions
 

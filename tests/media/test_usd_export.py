@@ -9,7 +9,8 @@ from pxr import Tf, Usd, UsdGeom
 
 from b2d_cli.main import cli
 from episode_media.qpos import episode_qpos
-from episode_media.source import episode_scene, open_episode
+from episode_media.source import episode_scene
+from episodes.reader import open_episode
 from episode_media.usd_export import export_usd
 from episodes.raw import read_raw
 from sim.errors import SpecError
