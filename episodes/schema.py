@@ -45,6 +45,10 @@ EPISODE_NODES = (
     Node("action/source", "dataset", "str", ()),
     Node("action/control_mode", "dataset", "str", ()),
     Node("action/action_type", "dataset", "str", ()),
+    # b2d additions: the operator stream's StepFlag bits (teleop/streams/sanitizer.py) OR-ed over the control
+    # steps of each frame, and their reasons (one per line, "" = clean)
+    Node("action/stream_flags", "dataset", "uint8", ("T",)),
+    Node("action/stream_reasons", "dataset", "str", ("T",)),
     Node("frame_valid", "dataset", "bool", ("T",)),
     Node("frame_errors", "dataset", "str", ("T",)),
     Node("robot/joint_names", "dataset", "str", ("J",)),

@@ -59,6 +59,8 @@ def replay_to_file(raw_path: Path, out_path: Path, drift_bound_m: float = DEFAUL
                         "object_names": json.dumps(result.object_names),
                         "articulated_joint_names": json.dumps(result.joint_names),
                         "actuator_names": json.dumps(raw.actuator_names)})
+        f.create_dataset("step_flags", data=raw.step_flags, compression="gzip", compression_opts=4)
+        f.create_dataset("step_reasons", data=list(raw.step_reasons) or [""] * raw.num_steps, dtype=STR)
         for key in ("qpos", "robot_qpos", "robot_qvel", "robot_qeffort", "object_pose", "object_lin_vel",
                     "object_ang_vel", "joint_qpos", "joint_qvel", "joint_qeffort", "action", "drift_flags"):
             f.create_dataset(key, data=getattr(result, key), compression="gzip", compression_opts=4)
@@ -180,6 +182,7 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
         joints_by_object = _joints_by_object(joint_names)
         success_step = metrics.get("steps_to_stable")   # 1-based count of updates
         drift = rep["drift_flags"][()]
+        stream_flags, stream_reasons = _stream_flags_per_frame(rep, steps)
         T = len(steps)
         has_tactile = schema.TACTILE_ROOT in ren
         if profile.tactile_enabled and not has_tactile:
@@ -221,6 +224,7 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
                     "episode/is_first": k == 0, "episode/is_last": k == T - 1, "episode/done": k == T - 1,
                     "episode/success": success_step is not None and step + 1 >= success_step,
                     "action/action": rep["action"][step], "action/valid": bool(np.isfinite(rep["action"][step]).all()),
+                    "action/stream_flags": stream_flags[k], "action/stream_reasons": stream_reasons[k],
                     "frame_valid": not error, "frame_errors": error,
                     "robot/qpos": rep["robot_qpos"][step], "robot/qvel": rep["robot_qvel"][step],
                     "robot/qeffort": rep["robot_qeffort"][step],
@@ -244,6 +248,22 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
             writer.file.create_dataset("metrics/timeseries/sim_step", data=np.arange(1, rep["action"].shape[0] + 1))
     return {"frames": int(T), "success": bool(metrics.get("success", False)), "lscr": metrics.get("lscr"),
             "sha256": file_sha256(out_path), "bytes": out_path.stat().st_size}
+
+
+def _stream_flags_per_frame(rep: h5py.File, steps: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """The operator stream's flags (StepFlag bits, OR-ed) and distinct reasons over the control steps each
+    frame covers, (previous frame's step, this frame's step]; zeros for replays made before they were kept."""
+    if "step_flags" not in rep:
+        return np.zeros(len(steps), np.uint8), [""] * len(steps)
+    flags = rep["step_flags"][()]
+    reasons = [r.decode() if isinstance(r, bytes) else str(r) for r in rep["step_reasons"][()]]
+    out_flags, out_reasons, start = np.zeros(len(steps), np.uint8), [], 0
+    for k, step in enumerate(steps):
+        out_flags[k] = np.bitwise_or.reduce(flags[start: step + 1], initial=0)
+        lines = [line for r in reasons[start: step + 1] for line in r.splitlines() if line]
+        out_reasons.append("\n".join(dict.fromkeys(lines)))
+        start = step + 1
+    return out_flags, out_reasons
 
 
 def _joints_by_object(joint_names: list[str]) -> dict[str, list[int]]:

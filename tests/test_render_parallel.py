@@ -154,3 +154,25 @@ def test_rendering_works_when_mujoco_was_imported_before_any_gl_default(tmp_path
     assert out.returncode == 0, out.stderr
     depth, geom = out.stdout.split()
     assert abs(float(depth) - 0.9) < 0.01 and geom == "0"    # camera 1 m above a 0.1 m sphere at the origin
+
+
+def test_operator_stream_flags_reach_the_episode_per_frame(raw_path, tmp_path):
+    from episodes.stages import raw_to_episode
+
+    edited = tmp_path / "episode_0008.raw.h5"
+    edited.write_bytes(raw_path.read_bytes())
+    with h5py.File(edited, "a") as f:      # steps 4 and 5 had a dropped frame and NaN keypoints
+        f["step_flags"][4], f["step_flags"][5] = 1, 4
+        reasons = ["" for _ in range(f["step_flags"].shape[0])]
+        reasons[4], reasons[5] = "dropped frame", "nan keypoints\ndropped frame"
+        if "step_reasons" in f:
+            del f["step_reasons"]
+        f.create_dataset("step_reasons", data=reasons, dtype=h5py.string_dtype())
+    profile = parse_sensor_profile({**TINY, "rate_hz": 20, "tactile": {"enabled": False}})   # a frame per 3 steps
+    episode = raw_to_episode(edited, profile, tmp_path / "out")
+    with h5py.File(episode) as f:
+        flags = f["action/stream_flags"][()]
+        reasons = [r.decode() for r in f["action/stream_reasons"][()]]
+    assert flags.tolist() == [0, 5, 0, 0, 0, 0]          # frame 1 covers steps 3..5
+    assert reasons[1] == "dropped frame\nnan keypoints" and reasons[0] == ""
+    assert validate_episode(episode) == []
