@@ -7,7 +7,9 @@
     record, traces = ev.result(), ev.traces()
 
 Spec keys (a task's ``metrics:`` block): terminal (required), stages, dwell_s (0.5), safety, grasp,
-expert_horizon_steps (alias expert_time_step), sim_dt_s (for TE; default: the first update's dt).
+expert_horizon_steps (alias expert_time_step), sim_dt_s (for TE; default: the first update's dt),
+tool_use (tool classes and the switch timeout, see evaluation/tools.py). Robot-motion diagnostics come
+from ``SceneState.robot_qvel`` / ``robot_effort`` when the states carry them.
 """
 
 from __future__ import annotations
@@ -22,18 +24,21 @@ import numpy as np
 from evaluation.dwell import Dwell
 from evaluation.errors import TaskSpecError, one_of
 from evaluation.grammar import CompileScope
+from evaluation.grasp import DEFAULTS as GRASP_DEFAULTS
 from evaluation.grasp import GraspMonitor
+from evaluation.motion import MotionMonitor
 from evaluation.predicates import predicate_names  # noqa: F401  (registers every predicate)
 from evaluation.records import EpisodeRecord, StepRecord, stack_steps
 from evaluation.safety import SafetyMonitor
 from evaluation.stages import StageGraph
 from evaluation.state import SceneState, TaskContext
 from evaluation.step import EvalStep
+from evaluation.tools import ToolUseMonitor, parse_tool_use
 
 log = logging.getLogger(__name__)
 
 SPEC_KEYS = ("terminal", "stages", "dwell_s", "safety", "grasp", "expert_horizon_steps", "expert_time_step",
-             "sim_dt_s", "description")
+             "sim_dt_s", "description", "tool_use")
 
 
 def _number(spec: Mapping, key: str, field: str, source: str | None, integer: bool = False,
@@ -73,6 +78,11 @@ class EpisodeEvaluator:
         self.terminal = CompileScope(context, self.stages.ids, source).compile(spec["terminal"], f"{field}.terminal")
         self.safety = SafetyMonitor(spec.get("safety"), context, source, f"{field}.safety")
         self.grasp = GraspMonitor(spec["grasp"], context, source, f"{field}.grasp") if "grasp" in spec else None
+        allowed, timeout = parse_tool_use(spec.get("tool_use"), spec.get("stages") or [], list(context.objects),
+                                          source, field)
+        self.tools = ToolUseMonitor(allowed, self.stages.depends_on, list(context.objects), timeout,
+                                    self.grasp.cfg if self.grasp else GRASP_DEFAULTS, self.safety) if allowed else None
+        self.motion = MotionMonitor()
         self.reset()
 
     @property
@@ -82,6 +92,11 @@ class EpisodeEvaluator:
     @property
     def grasp_objects(self) -> list[str]:
         return list(self.grasp.objects) if self.grasp else []
+
+    @property
+    def tool_candidates(self) -> list[str]:
+        """Columns of the ``tool_held`` trace: every object a stage's tools name."""
+        return list(self.tools.candidates) if self.tools else []
 
     @property
     def stable(self) -> bool:
@@ -95,6 +110,9 @@ class EpisodeEvaluator:
         self.terminal.reset()
         if self.grasp:
             self.grasp.reset()
+        if self.tools:
+            self.tools.reset()
+        self.motion.reset()
         self.initial = self.context.initial
         self.latched = {k: False for k in self.stages.ids}
         self.latched_at: dict[str, float] = {}
@@ -122,7 +140,8 @@ class EpisodeEvaluator:
         step = EvalStep(state, self.context, self.initial, dt, {}, self.latched)
         values = self.stages.evaluate(step)
         now = self.dwell.elapsed + dt  # sum of dt up to this update
-        for k in self.stages.latch(values, self.latched):
+        newly = self.stages.latch(values, self.latched)
+        for k in newly:
             self.latched_at[k] = now
         valid = self.stages.valid(values, self.latched)
         c = bool(self.terminal(step))
@@ -132,6 +151,8 @@ class EpisodeEvaluator:
             self.control_at_stable, self.queries_at_stable = self.control_steps, self.policy_queries
         drop, fast = self.safety.drop(state), self.safety.high_speed(state)
         grasp = self.grasp.update(step) if self.grasp else np.zeros(0)
+        tools = self.tools.update(step, self.latched, newly) if self.tools else ()
+        self.motion.update(state.robot_qvel, state.robot_effort)
         ids = self.stages.ids
         record = StepRecord(
             step=self.dwell.steps, time_s=self.dwell.elapsed, dt=float(dt), terminal=c, dwell_s=h,
@@ -139,13 +160,17 @@ class EpisodeEvaluator:
             stage_latched=np.array([self.latched[k] for k in ids], dtype=bool),
             stage_valid=np.array([valid[k] for k in ids], dtype=bool),
             current_depth=self.stages.max_depth(valid), latched_depth=self.stages.max_depth(self.latched),
-            drop=drop, high_speed=fast, violation=drop or fast, grasp_score=grasp)
+            drop=drop, high_speed=fast, violation=drop or fast, grasp_score=grasp,
+            tool_held=np.array(tools, dtype=bool))
         self.steps.append(record)
         return record
 
     def traces(self) -> dict[str, np.ndarray]:
         """Per-step quantities stacked over the episode; stage columns follow ``stage_ids``."""
-        return stack_steps(self.steps, len(self.stages), len(self.grasp_objects))
+        out = stack_steps(self.steps, len(self.stages), len(self.grasp_objects), len(self.tool_candidates))
+        per_update, _ = self.motion.summary(out["dt"])
+        out.update({f"joint_{q}_rms": v for q, v in per_update.items()})
+        return out
 
     def result(self, *, termination: str | None = None, error: str | None = None) -> EpisodeRecord:
         """Episode-level record. ``error``: the rollout ended because evaluation could not proceed."""
@@ -183,7 +208,17 @@ class EpisodeEvaluator:
             gsi=float(t["grasp_score"].max()) if self.grasp and n else None,
             gsi_mean=float(positive.mean()) if positive.size else None,
             t_expert=t_expert, te=t_expert / self.dwell.t_stable if success and t_expert else None,
-            grasp_objects=self.grasp_objects)
+            grasp_objects=self.grasp_objects, **self._tool_fields(),
+            **{f"joint_{q}_rms": v for q, v in self.motion.summary(t["dt"])[1].items()})
+
+    def _tool_fields(self) -> dict[str, Any]:
+        tu = self.tools
+        if tu is None:
+            return {}
+        return {"tsa": tu.tsa, "tool_stage_ids": list(tu.stages),
+                "tool_selected": [tu.selected.get(k) for k in tu.stages],
+                "tool_correct": [tu.correct.get(k, False) for k in tu.stages], "tool_candidates": list(tu.candidates),
+                "tssr": tu.tssr, "tool_switch_attempts": tu.attempts, "tool_switch_successes": tu.successes}
 
 
 def evaluate_states(metrics_spec: dict, context: TaskContext, states: Sequence[SceneState],

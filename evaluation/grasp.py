@@ -19,11 +19,28 @@ import numpy as np
 from evaluation.args import ArgReader
 from evaluation.geometry import length
 from evaluation.grammar import CompileScope
-from evaluation.state import TaskContext
+from evaluation.state import ObjectState, TaskContext
 from evaluation.step import EvalStep
 
 DEFAULTS = {"lift_min": 0.02, "hand_max_dist": 0.12, "stable_lin_vel": 0.05, "stable_ang_vel": 0.5,
             "sigma_v": 0.25, "sigma_w": 2.0, "hold_min_s": 0.5, "slip_speed": 0.1, "max_slips": 3.0}
+
+
+def lifted_and_held(s: EvalStep, name: str, lift_min: float, hand_max_dist: float) -> bool:
+    """The one "held" decision of the grasp and tool diagnostics: the object is at least ``lift_min``
+    above its initial height and touches a hand or has a palm centre within ``hand_max_dist``.
+    Computed once per update and object (``EvalStep.memo``)."""
+    key = ("held", name, lift_min, hand_max_dist)
+    held = s.memo.get(key)
+    if held is None:
+        lifted = s.obj(name).pos[2] - s.initial_obj(name).pos[2] >= lift_min
+        held = s.memo[key] = bool(lifted and s.held_by(name, "any", hand_max_dist))
+    return held
+
+
+def steady(o: ObjectState, cfg: dict) -> bool:
+    """Linear and angular speed within the grasp block's stable_lin_vel / stable_ang_vel."""
+    return float(length(o.lin_vel)) <= cfg["stable_lin_vel"] and float(length(o.ang_vel)) <= cfg["stable_ang_vel"]
 
 
 class GraspMonitor:
@@ -56,7 +73,7 @@ class GraspMonitor:
             pos = np.asarray(o.pos, dtype=float)
             v, w = float(length(o.lin_vel)), float(length(o.ang_vel))
             lifted = pos[2] - s.initial_obj(name).pos[2] >= c["lift_min"]
-            held = lifted and s.held_by(name, "any", c["hand_max_dist"])
+            held = lifted_and_held(s, name, c["lift_min"], c["hand_max_dist"])
             stable = v <= c["stable_lin_vel"] and w <= c["stable_ang_vel"]
             self.hold_s[i] = self.hold_s[i] + s.dt if held else 0.0
             rel = self._palm_offset(s, pos) if held else None

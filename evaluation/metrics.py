@@ -67,8 +67,25 @@ def _cell(g: pd.DataFrame, n_boot: int, seed: int) -> dict:
     }
     for name, column in (("TE", "te"), ("GSI", "gsi"), ("GSI_mean", "gsi_mean")):
         row[name] = _mean(g[column]) if column in g else np.nan
+    row.update(_tool_and_motion(g))
     row["n_errors"] = int((g["termination"] == "error").sum()) if "termination" in g else 0
     row["mean_steps"] = float(g["n_steps"].mean())
+    return row
+
+
+MOTION = (("JointVel_RMS", "joint_vel_rms"), ("JointAcc_RMS", "joint_acc_rms"), ("JointJerk_RMS", "joint_jerk_rms"),
+          ("JointEffort_RMS", "joint_effort_rms"))
+
+
+def _tool_and_motion(g: pd.DataFrame) -> dict:
+    """TSA and TSSR: means over the episodes where each is defined (with those episode counts), TSSR
+    with the total attempted and successful switches; motion: means of the per-episode RMS values."""
+    col = lambda name: g[name] if name in g else pd.Series(np.nan, index=g.index)  # noqa: E731
+    count = lambda name: int(pd.to_numeric(col(name), errors="coerce").notna().sum())  # noqa: E731
+    total = lambda name: int(pd.to_numeric(col(name), errors="coerce").fillna(0).sum())  # noqa: E731
+    row = {"TSA": _mean(col("tsa")), "n_TSA": count("tsa"), "TSSR": _mean(col("tssr")), "n_TSSR": count("tssr"),
+           "switch_attempts": total("tool_switch_attempts"), "switch_successes": total("tool_switch_successes")}
+    row.update({name: _mean(col(column)) for name, column in MOTION})
     return row
 
 

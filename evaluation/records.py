@@ -43,6 +43,7 @@ class StepRecord:
     high_speed: bool
     violation: bool  # V_j
     grasp_score: np.ndarray  # [O] float: G_{o,j} per grasp object
+    tool_held: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  # [C] candidate tools held
 
     def to_dict(self) -> dict:
         return {f.name: _plain(getattr(self, f.name)) for f in fields(self)}
@@ -51,12 +52,16 @@ class StepRecord:
 TRACE_DTYPES = {"step": np.int64, "time_s": np.float64, "dt": np.float64, "terminal": bool, "dwell_s": np.float64,
                 "stable": bool, "stage_value": bool, "stage_latched": bool, "stage_valid": bool,
                 "current_depth": np.int32, "latched_depth": np.int32, "drop": bool, "high_speed": bool,
-                "violation": bool, "grasp_score": np.float64}
+                "violation": bool, "grasp_score": np.float64, "tool_held": bool}
+# also in the traces, computed at the end (evaluation/motion.py): joint_{vel,acc,jerk,effort}_rms [T], the
+# RMS over robot joints per update, NaN where not available
 
 
-def stack_steps(steps: list[StepRecord], n_stages: int, n_grasp: int) -> dict[str, np.ndarray]:
-    """One array per quantity: [T] for scalars, [T, K] for stages, [T, O] for grasp scores."""
-    width = {"stage_value": n_stages, "stage_latched": n_stages, "stage_valid": n_stages, "grasp_score": n_grasp}
+def stack_steps(steps: list[StepRecord], n_stages: int, n_grasp: int, n_tools: int = 0) -> dict[str, np.ndarray]:
+    """One array per quantity: [T] for scalars, [T, K] for stages, [T, O] for grasp scores, [T, C] for
+    candidate tools."""
+    width = {"stage_value": n_stages, "stage_latched": n_stages, "stage_valid": n_stages, "grasp_score": n_grasp,
+             "tool_held": n_tools}
     out = {}
     for name, dtype in TRACE_DTYPES.items():
         values = [getattr(s, name) for s in steps]
@@ -103,6 +108,20 @@ class EpisodeRecord:
     t_expert: float | None
     te: float | None
     grasp_objects: list[str] = field(default_factory=list)
+    # tool use (None: no stage names tools / no switch attempted); lists follow tool_stage_ids
+    tsa: float | None = None
+    tool_stage_ids: list[str] = field(default_factory=list)
+    tool_selected: list[str | None] = field(default_factory=list)  # first held candidate per stage
+    tool_correct: list[bool] = field(default_factory=list)
+    tool_candidates: list[str] = field(default_factory=list)  # columns of the tool_held trace
+    tssr: float | None = None
+    tool_switch_attempts: int = 0
+    tool_switch_successes: int = 0
+    # robot motion: RMS over updates and joints (None: no robot state observed)
+    joint_vel_rms: float | None = None
+    joint_acc_rms: float | None = None
+    joint_jerk_rms: float | None = None
+    joint_effort_rms: float | None = None
 
     def to_dict(self) -> dict:
         """Flat plain dict: the labels first, then every field (JSON-serialisable)."""

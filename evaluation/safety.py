@@ -41,6 +41,7 @@ class SafetyMonitor:
         everything = list(context.objects)
         self.drop_objects: list[str] = []
         self.zone: dict | None = None
+        self.below = 0.05  # also the tool diagnostics' drop line when the task configures no drop rule
         if "drop" in raw:
             a = ArgReader("drop", raw["drop"], scope, f"{field}.drop")
             self.drop_objects = a.objects("objects", everything)
@@ -63,13 +64,14 @@ class SafetyMonitor:
             return bool(np.any(xy < z["xy_min"]) or np.any(xy > z["xy_max"]))
         return float(length(xy - z["center_xy"])) > z["radius"]
 
+    def dropped(self, state: SceneState, name: str) -> bool:
+        """This object is below the tabletop by more than the margin, or outside the table zone."""
+        pos = np.asarray(_obj(state, name).pos, dtype=float)
+        return bool(pos[2] < state.table_height - self.below or self._outside(pos[:2]))
+
     def drop(self, state: SceneState) -> bool:
-        """A tracked object is below the tabletop by more than the margin, or outside the table zone."""
-        for name in self.drop_objects:
-            pos = np.asarray(_obj(state, name).pos, dtype=float)
-            if pos[2] < state.table_height - self.below or self._outside(pos[:2]):
-                return True
-        return False
+        """A tracked object is dropped (``dropped``)."""
+        return any(self.dropped(state, name) for name in self.drop_objects)
 
     def high_speed(self, state: SceneState) -> bool:
         """A tracked object moves faster than the configured linear (or angular) limit."""

@@ -20,7 +20,7 @@ from evaluation.step import EvalStep
 
 log = logging.getLogger(__name__)
 
-STAGE_KEYS = ("id", "predicate", "depends_on", "description")
+STAGE_KEYS = ("id", "predicate", "depends_on", "description", "tools")  # tools: evaluation/tools.py
 STAGE_ID = re.compile(r"^[A-Za-z_][A-Za-z0-9_.-]*$")
 
 

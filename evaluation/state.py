@@ -41,6 +41,9 @@ class SceneState:
     table_height: float  # tabletop z, metres
     # sorted name pairs in contact this step; names are object ids, "left_hand", "right_hand", "table"
     contacts: frozenset[tuple[str, str]] = frozenset()
+    # robot joints (arms and hands, a fixed order per scene) for the motion diagnostics; None: not observed
+    robot_qvel: np.ndarray | None = None  # rad/s or m/s
+    robot_effort: np.ndarray | None = None  # actuator force in joint space (N m or N)
 
 
 @dataclass(frozen=True)

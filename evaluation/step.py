@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,6 +30,7 @@ class EvalStep:
     dt: float
     stage_value: Mapping[str, bool]  # current predicate value of each stage evaluated so far this step
     latched: Mapping[str, bool]  # latched flags after this step's closure (terminal only)
+    memo: dict = field(default_factory=dict)  # per-update results shared by the monitors (e.g. "held")
 
     def obj(self, name: str) -> ObjectState:
         try:

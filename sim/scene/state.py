@@ -28,6 +28,7 @@ class SceneObserver:
             for body in layout.hand_bodies:
                 self._owner[model.body(body).id] = f"{side}_hand"
         self._wrist_sites = {side: model.site(l.wrist_site).id for side, l in scene.layout.sides.items()}
+        self._robot_dofs = np.asarray(scene.robot_dof_adr, dtype=np.intp)   # arm and hand joints
 
     @cached_property
     def context(self) -> TaskContext:
@@ -65,4 +66,7 @@ class SceneObserver:
             hands={side: data.site_xpos[sid].copy() for side, sid in self._wrist_sites.items()},
             table_height=self.scene.table_height,
             contacts=self.contacts(data),
+            # motion diagnostics: two fancy-index copies, about 1 us each
+            robot_qvel=data.qvel[self._robot_dofs],
+            robot_effort=data.qfrc_actuator[self._robot_dofs],
         )
