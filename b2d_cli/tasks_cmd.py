@@ -28,7 +28,8 @@ def stage_graph(name: str) -> dict:
     ev = EpisodeEvaluator(task.metrics, task_context(task), source=str(task.source))
     raw = {s["id"]: s for s in task.metrics.get("stages", [])}
     stages = [{"id": sid, "depth": ev.stages.depth[sid], "depends_on": ev.stages.depends_on[sid],
-               "predicate": raw[sid]["predicate"]} for sid in ev.stages.latch_order]
+               "predicate": raw[sid]["predicate"], "tools": raw[sid].get("tools", [])}
+              for sid in ev.stages.latch_order]
     return {"task": task.name, "display_name": task.display_name, "paper_embodiment": task.paper_embodiment,
             "instruction": task.instruction, "joints": task.joint_names, "stages": stages,
             "terminal": task.metrics["terminal"], "dwell_s": ev.dwell.dwell_s,
@@ -59,6 +60,8 @@ def show(task: str, as_json: bool) -> None:
         deps = ", ".join(st["depends_on"]) or "-"
         click.echo(f"    [{st['depth']}] {st['id']}  <- {deps}")
         click.echo(f"        {_flow(st['predicate'])}")
+        if st["tools"]:
+            click.echo(f"        tools: {_flow(st['tools'])}")
     click.echo(f"  terminal (dwell {graph['dwell_s']} s, expert horizon {graph['expert_horizon_steps']} steps):")
     terminal = graph["terminal"]
     for item in terminal["all"] if isinstance(terminal, dict) and list(terminal) == ["all"] else [terminal]:

@@ -37,3 +37,9 @@ def test_tasks_check_reports_reach_and_rejects_unknown_names():
     assert all(r["arms"] for r in entry["targets"])
     result = CliRunner().invoke(cli, ["tasks", "check", "citrus_plate_loading", "--embodiment", "nope"])
     assert result.exit_code == 2 and "valid embodiment names" in result.output
+
+
+def test_tasks_show_prints_stage_tools():
+    graph = json.loads(CliRunner().invoke(cli, ["tasks", "show", "screwdriver_box_hammer", "--json"]).output)
+    assert any(stage["tools"] for stage in graph["stages"])
+    assert "tools:" in CliRunner().invoke(cli, ["tasks", "show", "screwdriver_box_hammer"]).output
