@@ -72,6 +72,8 @@ class _EpisodeSceneFields:
         self.embodiment = reader.static("meta/embodiment")
         self.scene_sample = reader.static("meta/scene")
         self.actuator_names = reader.static("action/names")
+        config = reader.meta("collection_config") if "meta/collection_config" in reader else {}
+        self.hand_model = config.get("hand_model", "generated") if isinstance(config, dict) else "generated"
         try:
             json.loads(self.scene_sample)
         except (TypeError, json.JSONDecodeError) as exc:

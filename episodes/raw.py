@@ -50,7 +50,8 @@ class RawRecording:
     step_flags: np.ndarray            # [T] uint8, operator-stream flags (0 = clean)
     success: bool
     extra: dict = field(default_factory=dict)
-    step_reasons: list[str] = field(default_factory=list)   # [T] why a step was flagged ("" = clean)
+    step_reasons: list[str] = field(default_factory=list)
+    hand_model: str = "generated"     # which hand geometry the scene was built with (replay rebuilds it)   # [T] why a step was flagged ("" = clean)
 
     @property
     def num_steps(self) -> int:
@@ -72,6 +73,7 @@ def write_raw(path: str | Path, rec: RawRecording) -> Path:
         for key in _ATTRS:
             f.attrs[key] = getattr(rec, key)
         f.attrs["extra"] = json.dumps(rec.extra, sort_keys=True)
+        f.attrs["hand_model"] = rec.hand_model
         for key in _LISTS:
             f.attrs[key] = json.dumps(getattr(rec, key))
         for key in _ARRAYS:
@@ -101,6 +103,7 @@ def read_raw(path: str | Path) -> RawRecording:
         for key in _LISTS:
             values[key] = json.loads(f.attrs.get(key, "[]"))
         values["extra"] = json.loads(f.attrs.get("extra", "{}"))
+        values["hand_model"] = str(f.attrs.get("hand_model", "generated"))   # absent before real hands existed
         for key in _ARRAYS:
             if key not in f:
                 raise SpecError(path, key, "a dataset")

@@ -53,7 +53,7 @@ def replay_to_file(raw_path: Path, out_path: Path, drift_bound_m: float = DEFAUL
     with atomic_path(out_path) as tmp, h5py.File(tmp, "w") as f:
         f.attrs.update({"schema": REPLAY_SCHEMA, "task": raw.task, "embodiment": raw.embodiment,
                         "episode_id": raw.episode_id, "seed": raw.seed, "scene_sample": raw.scene_sample,
-                        "operator": raw.operator, "raw_sha256": file_sha256(raw_path),
+                        "operator": raw.operator, "raw_sha256": file_sha256(raw_path), "hand_model": raw.hand_model,
                         "fidelity": json.dumps(result.fidelity), "episode_metrics": json.dumps(result.episode_metrics),
                         "robot_joint_names": json.dumps(raw.robot_joint_names),
                         "object_names": json.dumps(result.object_names),
@@ -161,6 +161,7 @@ class _RawView:
         self.embodiment = f.attrs["embodiment"]
         self.scene_sample = f.attrs["scene_sample"]
         self.actuator_names = json.loads(f.attrs["actuator_names"])
+        self.hand_model = str(f.attrs.get("hand_model", "generated"))
 
 
 # ---------------------------------------------------------------- assemble
@@ -200,7 +201,8 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
                                         for cam in profile.camera_ids}),
             "meta/collection_config": json.dumps({"profile": profile.raw, "profile_hash": profile.content_hash,
                                                   "control_hz": physics.CONTROL_HZ, "substeps": physics.SUBSTEPS,
-                                                  "seed": int(attrs["seed"]), "operator": attrs["operator"]}),
+                                                  "seed": int(attrs["seed"]), "operator": attrs["operator"],
+                                                  "hand_model": str(attrs.get("hand_model", "generated"))}),
             "meta/success": np.bool_(metrics.get("success", False)),
             "meta/schema_version": schema.SCHEMA_VERSION,
             "meta/dataset": json.dumps({"producer": "b2d", "episode_id": attrs["episode_id"],

@@ -52,7 +52,8 @@ class ReplayResult:
 def scene_for(raw: RawRecording, source=None) -> Scene:
     validate_name("task", raw.task)
     validate_name("embodiment", raw.embodiment)
-    scene = build_scene(load_task(raw.task), raw.embodiment, SceneSample.from_json(raw.scene_sample))
+    scene = build_scene(load_task(raw.task), raw.embodiment, SceneSample.from_json(raw.scene_sample),
+                        hand_model=raw.hand_model)
     names = [scene.model.actuator(i).name for i in range(scene.model.nu)]
     if list(raw.actuator_names) != names:
         raise SpecError(source, "actuator_names", f"the {len(names)} actuators of {raw.embodiment}",

@@ -134,7 +134,7 @@ class EpisodeRecording:
             robot_joint_names=list(scene.layout.joint_names), object_names=list(scene.object_names),
             stage_ids=list(self.evaluator.stage_ids), success=bool(result.success), **self.buf.result(),
             extra={"lscr": float(result.lscr or 0.0), "episode_record": result.to_dict(), **(extra or {})},
-            step_reasons=self.buf.note_list(),
+            step_reasons=self.buf.note_list(), hand_model=scene.layout.hand_model,
         )
 
 

@@ -176,3 +176,16 @@ def test_operator_stream_flags_reach_the_episode_per_frame(raw_path, tmp_path):
     assert flags.tolist() == [0, 5, 0, 0, 0, 0]          # frame 1 covers steps 3..5
     assert reasons[1] == "dropped frame\nnan keypoints" and reasons[0] == ""
     assert validate_episode(episode) == []
+
+
+def test_the_hand_model_is_recorded_and_replay_rebuilds_it(raw_path, tmp_path, monkeypatch):
+    """B2D_HAND_MODEL only chooses what a new recording is built with; replay follows the recording."""
+    from episodes.raw import read_raw
+    from episodes.stages import raw_to_episode
+
+    assert read_raw(raw_path).hand_model == "generated"
+    monkeypatch.setenv("B2D_HAND_MODEL", "real")      # citrus' rh5dg2 has no real model: must not be asked for
+    profile = parse_sensor_profile({**TINY, "tactile": {"enabled": False}})
+    episode = raw_to_episode(raw_path, profile, tmp_path / "out", max_frames=2)
+    with h5py.File(episode) as f:
+        assert json.loads(f["meta/collection_config"][()])["hand_model"] == "generated"

@@ -40,6 +40,7 @@ from .description import (EmbodimentDescription, GeomSpec, HandDescription, Link
                           load_embodiment, mat_to_quat)
 from .kinematics import ArmKinematics, axis_rotation, hand_link_poses
 from .mirror import side_links, side_pad, side_transform
+from .real_model import add_real_actuators, attach_real_hand, requested_hand_model
 
 log = logging.getLogger(__name__)
 
@@ -86,6 +87,7 @@ class RobotLayout:
     home_qpos: np.ndarray       # (len(joint_names),)
     cameras: list[str] = field(default_factory=list)
     torso_body: str = "torso"
+    hand_model: str = "generated"   # "generated" or "real" (recorded with each episode: replay rebuilds it)
     _kin: dict = field(default_factory=dict, repr=False)
 
     def arm_kinematics(self, side: str) -> ArmKinematics:
@@ -262,8 +264,12 @@ def _torso_transform(emb: EmbodimentDescription) -> tuple[Transform, np.ndarray]
     return Transform(pos, np.eye(3)), size
 
 
-def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
-    """Add both arms + hands, the shared torso and the six cameras to ``spec.worldbody``."""
+def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str, hand_model: str | None = None) -> RobotLayout:
+    """Add both arms + hands, the shared torso and the six cameras to ``spec.worldbody``.
+
+    ``hand_model``: ``"generated"`` (the hand file's geometry) or ``"real"`` (its ``real_model:`` MJCF,
+    see ``real_model.py``); None reads ``$B2D_HAND_MODEL`` (default generated)."""
+    real_hand = requested_hand_model(hand_model) == "real"
     emb = load_embodiment(embodiment)
     arm, hand = emb.arm, emb.hand
     world = spec.worldbody
@@ -311,19 +317,28 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
             arm_bodies.append(body.name)
         last_arm = body
         excludes += [(p + a, p + b) for a, b in arm.contact_exclude]
-        # ---- hand (mirrored on the left)
+        # ---- hand (mirrored on the left), or the real model of this side
         links = side_links(hand.links, side)
         hand_base_tf = arm.flange @ side_transform(hand.mount, side)
         bodies = {}
-        for link in links:
-            parent = bodies[link.parent] if link.parent else last_arm
-            origin = hand_base_tf if link.parent is None else None
-            b = _add_link(parent, link, p, origin=origin, unit=unit)
-            excludes.append((parent.name, b.name))
-            bodies[link.name] = b
+        side_q = hand_q
+        real = None
+        if real_hand:
+            real = attach_real_hand(spec, last_arm, hand, side, hand_base_tf, p)
+            bodies = real.bodies
+            side_q = {j: float(np.clip(q, *real.joint_range[j])) for j, q in hand_q.items()}
+            # pads sit on the alias bodies: keep them off the model body the finger body hangs on
+            excludes += [(b.name, b.parent.parent.name) for b in bodies.values() if b.parent.parent.name != "world"]
+        else:
+            for link in links:
+                parent = bodies[link.parent] if link.parent else last_arm
+                origin = hand_base_tf if link.parent is None else None
+                b = _add_link(parent, link, p, origin=origin, unit=unit)
+                excludes.append((parent.name, b.name))
+                bodies[link.name] = b
+            excludes += [(p + a, p + b) for a, b in hand.contact_exclude]
         palm = bodies[links[0].name]
         palms[side] = palm
-        excludes += [(p + a, p + b) for a, b in hand.contact_exclude]
         ws = side_transform(hand.wrist_site, side)
         palm.add_site(name=f"{p}wrist_site", pos=ws.pos, quat=ws.quat, size=[0.006, 0.006, 0.006],
                       rgba=[0.9, 0.2, 0.2, 0.5], group=4)
@@ -354,7 +369,7 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
             arm_acts.append(p + j.name)
             ctrl.append(float(home_arm[side][i]))
         hand_acts = []
-        for a in hand.actuators:
+        for a in (hand.actuators if real is None else ()):
             j = hand.joint(a.joint)
             kp0, kv0, d = servo_gains(a.effort, a.velocity, _finger_inertia(hand, a.joint), hand.servo_error_at_full_effort)
             _position_actuator(spec, p + a.name, p + a.joint, j.range, a.effort,
@@ -362,7 +377,10 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
             _add_motor_damping(spec, p + a.joint, d)
             hand_acts.append(p + a.name)
             ctrl.append(hand_q[a.joint])
-        for c in hand.couplings:
+        if real is not None:       # the model's own servos (and tendons for its couplings)
+            hand_acts = add_real_actuators(spec, real)
+            ctrl += [side_q[a.joint] for a in hand.actuators]
+        for c in (hand.couplings if real is None else ()):
             eq = spec.add_equality(name=f"{p}{c.joint}_coupling", type=mujoco.mjtEq.mjEQ_JOINT,
                                    name1=p + c.joint, name2=p + c.master)
             data = np.zeros(len(eq.data))
@@ -371,17 +389,19 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
         hand_joint_names = [p + j.name for link in links for j in link.joints]
         actuators += arm_acts + hand_acts
         joints += arm_joint_names + hand_joint_names
-        qpos += list(home_arm[side]) + [hand_q[j.name] for link in links for j in link.joints]
+        qpos += list(home_arm[side]) + [side_q[j.name] for link in links for j in link.joints]
         sides[side] = SideLayout(
             side=side, arm_joints=arm_joint_names, hand_joints=hand_joint_names, arm_actuators=arm_acts,
             hand_actuators=hand_acts, wrist_site=f"{p}wrist_site", tactile_sites=tactile_sites,
-            tactile_bodies=tactile_bodies, hand_bodies=[b.name for b in bodies.values()],
+            tactile_bodies=tactile_bodies,
+            hand_bodies=[b.name for b in bodies.values()] + (real.model_bodies if real is not None else []),
             arm_bodies=arm_bodies, hand_base=palm.name, camera=f"{side}_wrist",
         )
         # the hand base is rigidly on the last arm link: the palm and the links hinged on it
         # (finger bases, thumb base, links near the wrist) cannot meaningfully touch the last two arm links
         near = [lk.name for lk in hand.links if np.linalg.norm(hand_poses[lk.name].pos) < WRIST_NEAR_M]
-        for b in [p + n for n in near] + [p + lk.name for lk in links if lk.parent == links[0].name]:
+        wrist = [p + n for n in near] + [p + lk.name for lk in links if lk.parent == links[0].name]
+        for b in (wrist if real is None else real.wrist_bodies):
             excludes += [(arm_bodies[-1], b), (arm_bodies[-2], b)]
     seen = set()
     for a, b in excludes:
@@ -394,4 +414,5 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str) -> RobotLayout:
     return RobotLayout(
         embodiment=emb.name, sides=sides, actuator_names=actuators, joint_names=joints,
         home_ctrl=np.array(ctrl), home_qpos=np.array(qpos), cameras=cameras, _kin=kin,
+        hand_model="real" if real_hand else "generated",
     )

@@ -268,6 +268,7 @@ class HandDescription:
     contact_exclude: tuple[tuple[str, str], ...]
     servo_error_at_full_effort: float
     path: Path
+    real_model: Any = None         # real_model.RealModelSpec: optional real MJCF for this hand
 
     @property
     def joints(self) -> list[JointSpec]:
@@ -748,17 +749,24 @@ def load_hand(name: str) -> HandDescription:
         for field_name, keys in (("close", close), ("late", late)):
             _check_actuators(keys, act_names, gctx.sub(field_name))
         tabletop = TabletopGrasp(centre=_vec(_get(g, "centre", gctx), 3, gctx.sub("centre")), close=close, late=late)
+    tactile = _tactile(data, ctx, {link.name for link in links}, fingers)
+    real_model = None
+    if "real_model" in data:
+        from .real_model import parse_real_model   # late: real_model builds on this module
+
+        real_model = parse_real_model(data["real_model"], ctx.sub("real_model"), links, fingers,
+                                      [a.name for a in actuators], {s.attach_body for s in tactile.sites})
     return HandDescription(
         name=str(data.get("name", name)), display_name=str(data.get("display_name", name)),
         source=str(_get(data, "source", ctx)), assumptions=str(data.get("assumptions", "")),
         mount=_transform(data.get("mount"), ctx.sub("mount")), links=tuple(links),
         actuators=tuple(actuators), couplings=tuple(couplings),
         wrist_site=_transform(_get(data, "wrist_site", ctx), ctx.sub("wrist_site")),
-        tactile=_tactile(data, ctx, {link.name for link in links}, fingers),
+        tactile=tactile,
         home=home, fingers=tuple(fingers), grasp_probe=probe, tabletop_grasp=tabletop,
         contact_exclude=_excludes(data, ctx, {link.name for link in links}),
         servo_error_at_full_effort=_num(data.get("servo_error_at_full_effort", 0.1), ctx.sub("servo_error_at_full_effort"), True),
-        path=path,
+        path=path, real_model=real_model,
     )
 
 

@@ -88,7 +88,8 @@ class Scene:
         return data
 
 
-def build_scene(task: TaskSpec, embodiment: str, sample: SceneSample) -> Scene:
+def build_scene(task: TaskSpec, embodiment: str, sample: SceneSample, hand_model: str | None = None) -> Scene:
+    """``hand_model``: "generated", "real" (the hand file's real_model MJCF) or None ($B2D_HAND_MODEL)."""
     spec = mujoco.MjSpec()
     spec.modelname = f"{task.name}__{embodiment}"
     physics.configure_options(spec)
@@ -114,7 +115,7 @@ def build_scene(task: TaskSpec, embodiment: str, sample: SceneSample) -> Scene:
         add_free_object(spec, name, d["shape"], size, d["mass"], 0.8, d["rgba"],
                         (d["xy"][0], d["xy"][1], z), yaw_quat(d["yaw_deg"]))
         distractor_names.append(name)
-    layout = add_bimanual_robot(spec, embodiment)
+    layout = add_bimanual_robot(spec, embodiment, hand_model=hand_model)
     model = spec.compile()
     _perturb_cameras(model, sample.camera_offsets)
     return Scene(model, task, sample, layout, list(task.objects), distractor_names)
