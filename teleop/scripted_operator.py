@@ -7,7 +7,8 @@ same plan drives any embodiment: nothing here depends on a particular arm or han
 
 Where the object sits in the hand and how the hand closes come from the hand file: its
 `tabletop_grasp` (object centre in the wrist-site frame, closing targets, which actuators close
-late), else its `grasp_probe` power grasp. Like a person, the
+late), else its `grasp_probe` power grasp. Where the object goes comes from the plan step's
+`place_offset` (see `place_offset`). Like a person, the
 operator looks once more where the object sits in the hand when it is above the target, and
 corrects the lowering for a slipped grasp.
 """
@@ -22,7 +23,9 @@ import numpy as np
 
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.mirror import mirror_vec
+from sim.errors import SpecError
 from sim.scene.builder import Scene
+from sim.tasks import TaskSpec
 
 # Palm down, fingers pointing away from the robot (+y world): hand axes (x, y=palm normal, z=fingers).
 PALM_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
@@ -40,8 +43,9 @@ LIFT_HEIGHT_M = 0.14
 RELEASE_GAP_M = 0.005         # lowered to just above the plate: fruit let go higher bounces and rolls
 PALM_CLEARANCE_M = 0.004
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
+MAX_SLIP_M = 0.06             # a larger offset means the object is not in the hand at all
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
-SETTLE_STEPS = 45             # after the last release; reach-and-stop ends earlier on success
+SETTLE_STEPS = 120            # after the last release; reach-and-stop ends earlier on success
 
 
 def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
@@ -56,6 +60,16 @@ def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
     else:
         grasp = TabletopGrasp(centre=np.zeros(3), close={}, late=())
     return dataclasses.replace(grasp, centre=mirror_vec(grasp.centre)) if side == "left" else grasp
+
+
+def place_offset(task: TaskSpec, index: int) -> np.ndarray:
+    """A plan step's `place_offset`: [dx, dy] from the target's centre, optionally dz from its top
+    (negative: lowered into a container and let go just above its floor rather than its rim)."""
+    raw = task.demo_plan[index].get("place_offset", [0.0, 0.0])
+    if (not isinstance(raw, (list, tuple)) or len(raw) not in (2, 3)
+            or not all(isinstance(v, (int, float)) and np.isfinite(v) for v in raw)):
+        raise SpecError(task.source, f"demo_plan[{index}].place_offset", "[dx, dy] or [dx, dy, dz] in metres", raw)
+    return np.array([*raw, 0.0][:3], float)
 
 
 def _quat(R: np.ndarray) -> np.ndarray:
@@ -147,8 +161,8 @@ class ScriptedOperator:
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [],
                                 "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, start),
                                 "home": (pos0, quat0)}
-        for item in scene.task.demo_plan:
-            self._plan_pick_place(data, item)
+        for i, item in enumerate(scene.task.demo_plan):
+            self._plan_pick_place(data, item, place_offset(scene.task, i))
         for side in self.sides.values():
             side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], closure=OPEN)
         self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS
@@ -156,7 +170,7 @@ class ScriptedOperator:
     def _object_pos(self, data, name) -> np.ndarray:
         return data.xpos[self.scene.object_body_ids[name]].copy()
 
-    def _plan_pick_place(self, data, item: dict) -> None:
+    def _plan_pick_place(self, data, item: dict, offset_xyz: np.ndarray) -> None:
         side = self.sides[item["hand"]]
         tl: SideTimeline = side["timeline"]
         task = self.scene.task
@@ -167,8 +181,9 @@ class ScriptedOperator:
         offset = PALM_DOWN @ np.array([cx, max(cy, half_z + PALM_CLEARANCE_M), cz])
         grasp = self._object_pos(data, item["pick"]) - offset
         target = task.objects[item["place"]]
-        place_xy = self._object_pos(data, item["place"])[:2] + np.asarray(item.get("place_offset", [0, 0]))
-        place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + half_z + RELEASE_GAP_M)
+        place_xy = self._object_pos(data, item["place"])[:2] + offset_xyz[:2]
+        place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + offset_xyz[2]
+                   + half_z + RELEASE_GAP_M)
         place = np.array([*place_xy, place_z]) - offset
         up = np.array([0, 0, 1.0])
         tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=PALM_DOWN_QUAT, closure=OPEN)
@@ -193,6 +208,8 @@ class ScriptedOperator:
             wrist = data.site_xpos[side["wrist_site_id"]]
             error = (self._object_pos(data, name) - wrist) - planned_offset
             error[2] = 0.0      # height is set by the release gap
+            if np.linalg.norm(error) > MAX_SLIP_M:     # not in the hand: nothing to correct for
+                continue
             for frame in side["timeline"].frames[frames]:    # lower .. the end of this pick
                 frame.pos = frame.pos - error
 

@@ -10,7 +10,7 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.recorder import record_episode
-from teleop.scripted_operator import ScriptedOperator, hand_grasp
+from teleop.scripted_operator import ScriptedOperator, hand_grasp, place_offset
 
 SEED = 2      # a demonstration sample in which all four fruit stay on the plate
 
@@ -65,3 +65,49 @@ def test_negative_rolling_friction_is_refused(tmp_path):
     raw["objects"]["lemon_1"]["rolling_friction"] = -0.1
     with pytest.raises(SpecError, match="objects.lemon_1.rolling_friction"):
         parse_task(raw, tmp_path / "citrus.yaml")
+
+
+@pytest.mark.parametrize("bad", [[0.1], [0.0, 0.0, 0.0, 0.0], "near", [0.0, float("nan")]])
+def test_bad_place_offset_names_file_and_field(tmp_path, bad):
+    raw = yaml.safe_load(load_task("citrus_plate_loading").source.read_text())
+    raw["demo_plan"][1]["place_offset"] = bad
+    task = parse_task(raw, tmp_path / "citrus.yaml")
+    with pytest.raises(SpecError, match=r"citrus.yaml: field 'demo_plan\[1\].place_offset'"):
+        place_offset(task, 1)
+
+
+def test_place_offset_dz_defaults_to_the_targets_top():
+    task = load_task("citrus_plate_loading")
+    assert place_offset(task, 0).tolist() == [0.065, -0.055, 0.0]
+
+
+def _operator_with_lemon_at(offset_from_hand):
+    """The operator planned on seed SEED's scene, with lemon_1 put `offset_from_hand` away from where
+    the plan expects it in the right hand at the first above-the-target check."""
+    import mujoco
+
+    task = load_task("citrus_plate_loading")
+    scene = build_scene(task, "ur5_rh5dg2", demonstration_sample(task, SEED))
+    data = scene.home_data()
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    side = op.sides["right"]
+    carried_at, name, planned_offset, _ = side["corrections"][0]
+    adr = scene.model.jnt_qposadr[scene.model.body_jntadr[scene.object_body_ids[name]]]
+    data.qpos[adr:adr + 3] = data.site_xpos[side["wrist_site_id"]] + planned_offset + offset_from_hand
+    mujoco.mj_forward(scene.model, data)
+    before = [f.pos.copy() for f in side["timeline"].frames]
+    op._correct_place(side, data, carried_at)
+    return before, [f.pos for f in side["timeline"].frames]
+
+
+def test_a_slipped_object_shifts_the_lowering():
+    """The lemon sits 2 cm further right in the hand: the hand lowers 2 cm further left."""
+    before, after = _operator_with_lemon_at(np.array([0.02, -0.01, 0.0]))
+    shifts = {tuple(np.round(a - b, 6)) for a, b in zip(after, before)}
+    assert shifts == {(0.0, 0.0, 0.0), (-0.02, 0.01, 0.0)}
+
+
+def test_an_object_not_in_the_hand_changes_nothing():
+    before, after = _operator_with_lemon_at(np.array([0.3, 0.0, 0.0]))
+    assert all(np.array_equal(a, b) for a, b in zip(after, before))
