@@ -1,10 +1,10 @@
 """Tactile sensing of a compiled b2d scene: the TacMap counterpart of ``sim.render.CameraRig``.
 
 Sites: every tactile site of the embodiment's hand on both sides, named as in the MuJoCo model
-(``{side}_{site}``, left hand first, hand-file order). Each site uses its group's surface asset from
-the tactile registry (``tactile.registry``): all sites of a group share one SurfaceMap, hence one set
-of rays. An asset is rasterised from the compiled pad geom of the group's right-hand site, the geom
-that physically makes contact, just as ``tactile.targets`` builds ray targets from compiled geoms:
+(``{side}_{site}``, left hand first, hand-file order). Each site uses its group's surface asset
+(``tactile.registry``, groups from the hand's ``tactile`` block): all sites of a group share one
+SurfaceMap, hence one set of rays. An asset is rasterised from the compiled pad geom of the group's
+right-hand site, the geom that physically makes contact, just as ``tactile.targets`` builds ray targets from compiled geoms:
 the tactile surface lies where MuJoCo's contacts happen, edges included. (The pad geom is a flat
 box, so a hand pad's ``curvature_radius`` does not shape it; the rounded sheet of ``tactile.pads``
 lay 3.2-5.3 mm under the box at the pad edges, where contacts went unseen.) Left assets are the
@@ -27,7 +27,7 @@ import trimesh
 
 from sim.embodiment import load_embodiment
 from tactile.quantize import encoding_description
-from tactile.registry import TactileLayout, hand_tactile_layout, surface_assets
+from tactile.registry import surface_assets
 from tactile.sensor import PASS2_BACKOFF_M, TactileFrame, TactileSensor, TactileSite
 from tactile.surface import SurfaceMap
 from tactile.targets import clear_cache as clear_target_cache
@@ -35,6 +35,7 @@ from tactile.targets import geom_mesh_in_body, geom_raycaster, target_geoms
 
 if TYPE_CHECKING:
     from sim.embodiment import HandDescription, RobotLayout
+    from sim.embodiment.description import TactileSpec
     from sim.registry import SensorProfile
     from sim.scene.builder import Scene
 
@@ -62,7 +63,7 @@ def clear_caches() -> None:
     clear_target_cache()
 
 
-def pad_contact_meshes(model: mujoco.MjModel, tactile: TactileLayout) -> dict[str, trimesh.Trimesh]:
+def pad_contact_meshes(model: mujoco.MjModel, tactile: TactileSpec) -> dict[str, trimesh.Trimesh]:
     """Group -> the compiled pad geom of its first right-hand site, in that site's attach-body frame."""
     meshes = {}
     for group in tactile.groups.values():
@@ -74,7 +75,7 @@ def pad_contact_meshes(model: mujoco.MjModel, tactile: TactileLayout) -> dict[st
     return meshes
 
 
-def _assets(model: mujoco.MjModel, hand: str, tactile: TactileLayout, resolution: int) -> dict[str, SurfaceMap]:
+def _assets(model: mujoco.MjModel, hand: str, tactile: TactileSpec, resolution: int) -> dict[str, SurfaceMap]:
     """The hand's surface assets, cached per pad geometry (~0.1 s per group at 240 x 240)."""
     meshes = pad_contact_meshes(model, tactile)
     digest = hashlib.sha256()
@@ -87,7 +88,7 @@ def _assets(model: mujoco.MjModel, hand: str, tactile: TactileLayout, resolution
     return _ASSETS[key]
 
 
-def _rig_sites(model: mujoco.MjModel, robot: RobotLayout, hand: HandDescription, tactile: TactileLayout,
+def _rig_sites(model: mujoco.MjModel, robot: RobotLayout, hand: HandDescription, tactile: TactileSpec,
                resolution: int) -> list[RigSite]:
     assets = _assets(model, str(hand.path), tactile, resolution)
     sites = []
@@ -111,7 +112,7 @@ class TactileRig:
         self.embodiment = robot.embodiment
         self.resolution = int(resolution)
         hand = load_embodiment(robot.embodiment).hand
-        tactile = hand_tactile_layout(hand.path)
+        tactile = hand.tactile
         self.grouping = tactile.grouping
         self.sites = tuple(_rig_sites(model, robot, hand, tactile, self.resolution))
         self.sensor = TactileSensor([TactileSite(s.name, s.surface, s.attach_body) for s in self.sites],

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import yaml
 
-from sim.embodiment import hand_names, load_hand
+from sim.embodiment import DescriptionError, hand_names, load_hand
+from sim.embodiment.description import parse_tactile_block, read_hand_file
 from sim.embodiment.mirror import M
-from tactile.errors import TactileSpecError
-from tactile.registry import hand_tactile_layout, load_tactile_layout, parse_tactile_block, surface_assets
+from tactile.registry import surface_assets
 
 BLOCK = """
 tactile:
@@ -38,12 +38,20 @@ PAPER_POLICY = {
 }
 
 
+LINKS = {"rh_thdistal", "rh_ffdistal", "rh_mfdistal", "rh_rfdistal"}
+FINGERS = ["thumb", "index", "middle"]
+
+
 def block():
     return copy.deepcopy(yaml.safe_load(BLOCK)["tactile"])
 
 
+def parse(raw, source="shadow.yaml", fingers=FINGERS):
+    return parse_tactile_block(raw, source, LINKS, fingers)
+
+
 def test_block_parses_into_groups_assets_and_a_site_map():
-    layout = parse_tactile_block(block(), "shadow.yaml")
+    layout = parse(block())
     assert layout.grouping == "side_specific" and list(layout.groups) == ["TH", "4F"]
     assert layout.groups["4F"].sites == ("index_tip", "middle_tip")
     assert layout.site_assets() == {
@@ -67,7 +75,7 @@ def test_side_shared_serves_both_hands_with_one_asset():
     raw["grouping"] = "side_shared"
     raw["groups"]["TH"]["assets"] = {"right": "TH", "left": "TH"}
     raw["groups"]["4F"]["assets"] = {"right": "4F", "left": "4F"}
-    layout = parse_tactile_block(raw, "sharpa.yaml")
+    layout = parse(raw, "sharpa.yaml")
     assert set(layout.site_assets().values()) == {"TH", "4F"}
     assert sorted(surface_assets(layout)) == ["4F", "TH"]
 
@@ -104,6 +112,13 @@ def _asymmetric_shared_pad(b):
         (lambda b: b["groups"]["TH"]["assets"].pop("left"), "tactile.groups.TH.assets.left", "non-empty string"),
         (lambda b: b["groups"]["4F"]["pad"].pop("normal"), "tactile.groups.4F.pad.normal", "a value"),
         (lambda b: b["sites"][1].pop("attach_body"), "tactile.sites[1].attach_body", "non-empty string"),
+        (lambda b: b["sites"][1].update(attach_body="rh_ffmiddle"), "tactile.sites[1].attach_body",
+         "a link of this hand"),
+        (lambda b: b["sites"][1].update(finger="pinky"), "tactile.sites[1].finger",
+         "one of the fingers thumb, index, middle"),
+        (lambda b: b["sites"].pop(2), "tactile.sites", "one site per finger"),
+        (lambda b: b.update(pad_condim=2), "tactile.pad_condim", "one of 1, 3, 4, 6"),
+        (lambda b: b.update(pad_friction=[1.0, 0.1]), "tactile.pad_friction", "a list of 3 numbers"),
         (lambda b: b["sites"][2].update(name="index_tip"), "tactile.sites[2].name", "unique"),
         (lambda b: b["sites"][2].update(group="MID"), "tactile.sites[2].group", "one of the groups TH, 4F"),
         # a group whose pads differ
@@ -124,16 +139,16 @@ def _asymmetric_shared_pad(b):
 def test_block_errors_name_the_field(edit, field, words):
     raw = block()
     edit(raw)
-    with pytest.raises(TactileSpecError, match=rf"shadow\.yaml: field '{re.escape(field)}': expected .*{re.escape(words)}"):
-        parse_tactile_block(raw, "shadow.yaml")
+    with pytest.raises(DescriptionError, match=rf"shadow\.yaml: field '{re.escape(field)}': expected .*{re.escape(words)}"):
+        parse(raw)
 
 
 def test_thumb_and_fingers_mixed_in_one_group_is_refused():
     raw = block()
     raw["sites"].append({"name": "ring_tip", "finger": "ring", "group": "TH", "attach_body": "rh_rfdistal",
                          "pad": raw["groups"]["TH"]["pad"]})
-    with pytest.raises(TactileSpecError, match=r"field 'tactile.groups.TH': expected either the thumb sites"):
-        parse_tactile_block(raw, "shadow.yaml")
+    with pytest.raises(DescriptionError, match=r"field 'tactile.groups.TH': expected either the thumb sites"):
+        parse(raw, fingers=[*FINGERS, "ring"])
 
 
 def _hand_file_with(tmp_path, edit):
@@ -146,18 +161,18 @@ def _hand_file_with(tmp_path, edit):
 
 
 def test_loading_a_hand_file_with_a_bad_policy_or_differing_pads_names_file_and_field(tmp_path):
-    assert load_tactile_layout(_hand_file_with(tmp_path, lambda t: None)).grouping == "side_shared"
+    assert read_hand_file(_hand_file_with(tmp_path, lambda t: None)).tactile.grouping == "side_shared"
     path = _hand_file_with(tmp_path, lambda t: t.update(grouping="side-shared"))
-    with pytest.raises(TactileSpecError, match=rf"{re.escape(str(path))}: field 'tactile.grouping'"):
-        load_tactile_layout(path)
+    with pytest.raises(DescriptionError, match=rf"{re.escape(str(path))}: field 'tactile.grouping'"):
+        read_hand_file(path)
 
     def longer_middle_pad(t):
         t["sites"][2]["pad"] = dict(t["sites"][2]["pad"], length=0.018)
 
     path = _hand_file_with(tmp_path, longer_middle_pad)
-    with pytest.raises(TactileSpecError, match=rf"{re.escape(str(path))}: field 'tactile.sites\[2\].pad': "
+    with pytest.raises(DescriptionError, match=rf"{re.escape(str(path))}: field 'tactile.sites\[2\].pad': "
                                                r"expected the pad of group '4F'"):
-        load_tactile_layout(path)
+        read_hand_file(path)
 
 
 # Open: the paper groups these side-specific thumb/4F, which needs one pad on all non-thumb fingers;
@@ -169,23 +184,16 @@ REGROUPING_PENDING = {"dexhand021", "orca", "schunk_svh"}
 def test_catalog_hand_follows_the_papers_grouping_policy(hand, request):
     if hand in REGROUPING_PENDING:
         request.applymarker(pytest.mark.xfail(strict=True, reason="per_finger until one 4F pad is chosen"))
-    description = load_hand(hand)
-    layout = hand_tactile_layout(description.path)
-    assert layout.grouping == PAPER_POLICY[hand]
+    assert load_hand(hand).tactile.grouping == PAPER_POLICY[hand]
 
 
 @pytest.mark.parametrize("hand", hand_names())
-def test_catalog_hand_registry_matches_the_physics_sites(hand):
+def test_catalog_hand_groups_follow_their_policy(hand):
     description = load_hand(hand)
-    layout = hand_tactile_layout(description.path)
+    layout = description.tactile
     assert layout.resolution == 240 and layout.normal_convention == "inward"
-    # the registry and the physics read the same sites: names, fingers, bodies and pads
-    assert [(s.name, s.finger, s.group, s.attach_body) for s in layout.sites] == [
-        (s.name, s.finger, s.group, s.attach_body) for s in description.tactile.sites]
-    for site in description.tactile.sites:
-        pad = layout.groups[site.group].pad
-        assert np.allclose(pad.center, site.pad.center) and np.allclose(pad.normal, site.pad.normal)
-        assert (pad.length, pad.width) == (site.pad.length, site.pad.width)
+    for site in layout.sites:   # the physics pads are the group pads
+        assert site.pad.same_as(layout.groups[site.group].pad)
     sizes = sorted(len(g.sites) for g in layout.groups.values())
     fingers = len(description.fingers)
     assert sizes == ([1] * fingers if layout.grouping == "per_finger" else [1, fingers - 1])
