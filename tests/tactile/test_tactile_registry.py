@@ -175,15 +175,8 @@ def test_loading_a_hand_file_with_a_bad_policy_or_differing_pads_names_file_and_
         read_hand_file(path)
 
 
-# Open: the paper groups these side-specific thumb/4F, which needs one pad on all non-thumb fingers;
-# their pads follow each distal link, and a shared pad changes the grasp tests (see the hand files).
-REGROUPING_PENDING = {"dexhand021", "orca", "schunk_svh"}
-
-
 @pytest.mark.parametrize("hand", hand_names())
-def test_catalog_hand_follows_the_papers_grouping_policy(hand, request):
-    if hand in REGROUPING_PENDING:
-        request.applymarker(pytest.mark.xfail(strict=True, reason="per_finger until one 4F pad is chosen"))
+def test_catalog_hand_follows_the_papers_grouping_policy(hand):
     assert load_hand(hand).tactile.grouping == PAPER_POLICY[hand]
 
 
