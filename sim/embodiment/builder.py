@@ -346,7 +346,7 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str, hand_model: str | N
         for s in hand.tactile.sites:
             pad = side_pad(s.pad, side)
             R = np.column_stack([pad.axis, np.cross(pad.normal, pad.axis), pad.normal])  # x along finger, z out
-            b = bodies[s.attach_body]
+            b = bodies[emb.tactile_attach.get(s.name, s.attach_body)]
             sname = p + s.name
             b.add_site(name=sname, pos=pad.center, quat=mat_to_quat(R), type=mujoco.mjtGeom.mjGEOM_BOX,
                        size=[pad.length / 2, pad.width / 2, PAD_THICKNESS_M / 2], rgba=[0.1, 0.8, 0.3, 0.4], group=4)

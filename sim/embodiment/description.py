@@ -363,6 +363,9 @@ class EmbodimentDescription:
     torso: dict[str, Any]
     cameras: dict[str, CameraSpec]
     path: Path
+    # tactile registry override: site -> hand link whose frame holds the site and its pad (the pad's
+    # centre, normal and axis are read in that link's frame); sites not named keep the hand file's body
+    tactile_attach: dict[str, str] = field(default_factory=dict)
 
 
 # --------------------------------------------------------------------------------------------
@@ -1063,4 +1066,21 @@ def load_embodiment(name: str) -> EmbodimentDescription:
         name=str(data.get("name", name)), display_name=str(_get(data, "display_name", ctx)),
         arm=arm, hand=hand, mounts=mounts, home_wrist=home_wrist, home_arm=home_arm, home_seed=home_seed,
         torso=dict(data.get("torso", {}) or {}), cameras=cameras, path=path,
+        tactile_attach=_tactile_attach(data.get("tactile_attach") or {}, hand, ctx.sub("tactile_attach")),
     )
+
+
+def _tactile_attach(raw, hand: HandDescription, ctx: _Ctx) -> dict[str, str]:
+    """The embodiment's per-site attach-body overrides, checked against the hand's sites and links."""
+    if not isinstance(raw, dict):
+        ctx.fail(f"expected a mapping of tactile site -> hand link, got {raw!r}")
+    sites = [s.name for s in hand.tactile.sites]
+    links = {lk.name for lk in hand.links}
+    out = {}
+    for site, link in raw.items():
+        if site not in sites:
+            ctx.sub(str(site)).fail(f"expected a tactile site of hand {hand.name!r} {sites}")
+        if link not in links:
+            ctx.sub(str(site)).fail(f"expected a link of hand {hand.name!r}, got {link!r}")
+        out[str(site)] = str(link)
+    return out

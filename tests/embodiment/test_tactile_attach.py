@@ -1,0 +1,55 @@
+"""An embodiment file can move a tactile site to another link of its hand (the tactile registry's
+site-body attachment override); bad overrides fail naming the file and field."""
+
+import mujoco
+import pytest
+import yaml
+
+from sim.embodiment import add_bimanual_robot, description
+
+
+@pytest.fixture
+def embodiments_dir(tmp_path, monkeypatch):
+    monkeypatch.setattr(description, "EMBODIMENTS_DIR", tmp_path)
+    description.load_embodiment.cache_clear()
+    yield tmp_path
+    description.load_embodiment.cache_clear()
+
+
+def _write(folder, overrides):
+    raw = yaml.safe_load((description.CATALOG_DIR / "embodiments" / "ur5_rh5dg2.yaml").read_text())
+    raw["tactile_attach"] = overrides
+    (folder / "ur5_rh5dg2.yaml").write_text(yaml.safe_dump(raw))
+
+
+def _site_body(layout_model, site):
+    return layout_model.body(layout_model.site_bodyid[layout_model.site(site).id]).name
+
+
+def _build(folder, overrides):
+    _write(folder, overrides)
+    description.load_embodiment.cache_clear()
+    spec = mujoco.MjSpec()
+    layout = add_bimanual_robot(spec, "ur5_rh5dg2")
+    return layout, spec.compile()
+
+
+def test_a_site_moves_to_the_named_link_on_both_sides(embodiments_dir):
+    _, base = _build(embodiments_dir, {})
+    layout, model = _build(embodiments_dir, {"index_tip": "index_proximal"})
+    for side in ("left", "right"):
+        assert _site_body(base, f"{side}_index_tip").endswith("index_intermediate")      # the hand file's body
+        assert _site_body(model, f"{side}_index_tip").endswith("index_proximal")
+        assert layout.sides[side].tactile_bodies[f"{side}_index_tip"].endswith("index_proximal")
+        assert _site_body(model, f"{side}_middle_tip") == _site_body(base, f"{side}_middle_tip")   # others stay
+
+
+@pytest.mark.parametrize("overrides,field", [
+    ({"thumb_nail": "index_proximal"}, "tactile_attach.thumb_nail"),
+    ({"index_tip": "elbow"}, "tactile_attach.index_tip"),
+    (["index_tip"], "tactile_attach"),
+])
+def test_bad_overrides_name_the_file_and_field(embodiments_dir, overrides, field):
+    _write(embodiments_dir, overrides)
+    with pytest.raises(description.DescriptionError, match=rf"ur5_rh5dg2.yaml: field '{field}'"):
+        description.load_embodiment("ur5_rh5dg2")
