@@ -62,12 +62,12 @@ class EpisodeWriter:
 
     def append(self, frame: dict) -> None:
         for key, value in frame.items():
-            if isinstance(value, str) or np.asarray(value).nbytes < SMALL_FRAME_BYTES:
+            if not isinstance(value, str):
+                value = np.asarray(value)
+            if isinstance(value, str) or value.nbytes < SMALL_FRAME_BYTES:
                 # a copy: callers pass views into MjData that change with the next step
-                kept = value if isinstance(value, str) else np.array(value, copy=True)
-                self._small.setdefault(key, []).append((self._count, kept))
+                self._small.setdefault(key, []).append((self._count, value if isinstance(value, str) else value.copy()))
                 continue
-            value = np.asarray(value)
             ds = self._datasets.get(key)
             if ds is None:
                 ds = self._datasets[key] = self._create(key, value)
