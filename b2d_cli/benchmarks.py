@@ -12,8 +12,7 @@ import numpy as np
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
 from sim import physics
 from sim.registry import names, sensor_profile
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
 from sim.scene.state import SceneObserver
 from sim.tasks import load_task
 from teleop.demos import record_demonstrations
@@ -25,8 +24,7 @@ TACTILE_BENCH_MIN_STEPS = 480  # long enough for the scripted operator's first g
 
 
 def _scene():
-    spec = load_task(TASK)
-    return build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    return demonstration_scene(TASK, EMBODIMENT)
 
 
 def bench_recorder(steps: int) -> dict:

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import mujoco
 
-from episode_media.atomic import atomic_dir
 from episode_media.qpos import episode_qpos
 from episode_media.source import episode_scene, frame_range, frame_rate_hz
+from episodes.atomic import atomic_dir
 from episodes.reader import open_episode
 from sim.errors import SpecError
 from sim.render import set_positions

@@ -50,8 +50,8 @@ class RawRecording:
     step_flags: np.ndarray            # [T] uint8, operator-stream flags (0 = clean)
     success: bool
     extra: dict = field(default_factory=dict)
-    step_reasons: list[str] = field(default_factory=list)
-    hand_model: str = "generated"     # which hand geometry the scene was built with (replay rebuilds it)   # [T] why a step was flagged ("" = clean)
+    step_reasons: list[str] = field(default_factory=list)   # [T] why a step was flagged ("" = clean)
+    hand_model: str = "generated"     # which hand geometry the scene was built with (replay rebuilds it)
 
     @property
     def num_steps(self) -> int:

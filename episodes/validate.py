@@ -146,12 +146,19 @@ def _tactile_sites(f: h5py.File, problems: list[str]) -> list[str]:
     return sites
 
 
-def _profile_enables_tactile(f: h5py.File) -> bool:
+def _collection_profile(f: h5py.File) -> dict:
+    """The sensor profile recorded in meta/collection_config ({} when absent or malformed)."""
     try:
         config = json.loads(f["meta/collection_config"][()])
-        return bool(config["profile"]["tactile"]["enabled"])
     except (KeyError, ValueError, TypeError):
-        return False
+        return {}
+    profile = config.get("profile") if isinstance(config, dict) else None
+    return profile if isinstance(profile, dict) else {}
+
+
+def _profile_enables_tactile(f: h5py.File) -> bool:
+    tactile = _collection_profile(f).get("tactile")
+    return bool(tactile.get("enabled")) if isinstance(tactile, dict) else False
 
 
 def _check_labels(f: h5py.File, dims: dict, modalities: list[str], cameras: list[str], problems: list[str]) -> None:
@@ -227,8 +234,8 @@ def _check_keys(f: h5py.File, group: str, expected: list[str], source: str, prob
 
 
 def _profile_modalities(f: h5py.File) -> list[str]:
+    cameras = _collection_profile(f).get("cameras")
     try:
-        config = json.loads(f["meta/collection_config"][()])
-        return list(config["profile"]["cameras"].get("modalities", []))
-    except (KeyError, ValueError, TypeError, AttributeError):
+        return list(cameras.get("modalities", [])) if isinstance(cameras, dict) else []
+    except TypeError:
         return []

@@ -26,6 +26,7 @@ import numpy as np
 import trimesh
 
 from sim.embodiment import load_embodiment
+from sim.embodiment.builder import PAD_GEOM_SUFFIX
 from tactile.quantize import encoding_description
 from tactile.registry import surface_assets
 from tactile.sensor import PASS2_BACKOFF_M, TactileFrame, TactileSensor, TactileSite
@@ -39,7 +40,6 @@ if TYPE_CHECKING:
     from sim.registry import SensorProfile
     from sim.scene.builder import Scene
 
-PAD_GEOM_SUFFIX = "_pad"  # sim.embodiment.builder names the pad geom of MuJoCo site "s" "s_pad"
 ASSET_SIDE = "right"      # hand files describe the right hand; left assets are reflected from it
 
 

@@ -13,7 +13,7 @@ from sim.registry import channel, channel_names, names
 from sim.scene.builder import build_scene
 from sim.scene.sample import SceneSample, channel_sample, task_seed
 from sim.tasks import load_task
-from teleop.recorder import evaluation_horizon, record_episode
+from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
 
 log = logging.getLogger(__name__)
@@ -29,9 +29,6 @@ def run_rollouts(task: str, embodiment: str, channel_name: str, anchors: list[tu
                  episodes: int, max_steps: int | None = None, policy: str = "scripted_operator") -> list[dict]:
     """One row per rollout: the evaluator's episode record plus labels. Errors count as failures."""
     spec, chan = load_task(task), channel(channel_name)
-    horizon = evaluation_horizon(spec.metrics)
-    if max_steps is not None:
-        horizon = min(horizon, max_steps)
     rows = []
     for i in range(episodes):
         anchor_id, anchor = anchors[i % len(anchors)] if anchors else (None, None)
@@ -41,7 +38,7 @@ def run_rollouts(task: str, embodiment: str, channel_name: str, anchors: list[tu
         try:
             sample = channel_sample(spec, chan, seed, anchor, anchor_id)
             rec = record_episode(build_scene(spec, embodiment, sample), ScriptedOperator(), f"{i:04d}", seed,
-                                 max_steps=horizon)
+                                 max_steps=max_steps)    # the recorder stops at the 1.5x expert horizon
             rows.append({**rec.extra["episode_record"], **labels, "scene_sample": sample.to_json()})
         except Exception as exc:   # a failed rollout stays in the denominator (paper)
             log.exception("rollout %d of %s/%s failed", i, task, channel_name)

@@ -22,9 +22,7 @@ import numpy as np
 from sim import physics
 from sim.embodiment.description import Transform, mat_to_quat, rpy_to_matrix
 from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
-from sim.tasks import load_task
+from sim.scene.builder import demonstration_scene
 from teleop.recorder import EpisodeRecording, home
 from teleop.retarget.bench import session_keypoints
 from teleop.streams import OperatorFrame, write_stream
@@ -59,8 +57,7 @@ def _ms(seconds: float, steps: int) -> float:
 
 
 def run_session_bench(steps: int = 600) -> dict:
-    spec = load_task(TASK)
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(TASK, EMBODIMENT)
     with tempfile.TemporaryDirectory() as tmp:
         source = open_input([f"recorded:{write_stream(Path(tmp) / 'bench.npz', bench_frames(steps))}"])
     driver = StreamDriver(source)

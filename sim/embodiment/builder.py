@@ -44,6 +44,7 @@ from .real_model import add_real_actuators, attach_real_hand, requested_hand_mod
 
 log = logging.getLogger(__name__)
 
+PAD_GEOM_SUFFIX = "_pad"   # the contact-pad geom of tactile site "s" is "s_pad" (tactile.rig finds it so)
 SIDES = ("left", "right")
 _GEOM_TYPES = {
     "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE, "box": mujoco.mjtGeom.mjGEOM_BOX,
@@ -350,7 +351,7 @@ def add_bimanual_robot(spec: mujoco.MjSpec, embodiment: str, hand_model: str | N
             sname = p + s.name
             b.add_site(name=sname, pos=pad.center, quat=mat_to_quat(R), type=mujoco.mjtGeom.mjGEOM_BOX,
                        size=[pad.length / 2, pad.width / 2, PAD_THICKNESS_M / 2], rgba=[0.1, 0.8, 0.3, 0.4], group=4)
-            g = b.add_geom(name=f"{sname}_pad", type=mujoco.mjtGeom.mjGEOM_BOX,
+            g = b.add_geom(name=f"{sname}{PAD_GEOM_SUFFIX}", type=mujoco.mjtGeom.mjGEOM_BOX,
                            pos=pad.center - pad.normal * PAD_THICKNESS_M, quat=mat_to_quat(R),
                            size=[pad.length / 2, pad.width / 2, PAD_THICKNESS_M], rgba=list(PAD_RGBA))
             g.friction = list(hand.tactile.pad_friction)

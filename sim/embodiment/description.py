@@ -1082,5 +1082,8 @@ def _tactile_attach(raw, hand: HandDescription, ctx: _Ctx) -> dict[str, str]:
             ctx.sub(str(site)).fail(f"expected a tactile site of hand {hand.name!r} {sites}")
         if link not in links:
             ctx.sub(str(site)).fail(f"expected a link of hand {hand.name!r}, got {link!r}")
+        if hand.real_model is not None and link not in hand.real_model.bodies:   # must exist on both hand models
+            ctx.sub(str(site)).fail(f"expected a link mapped in hand {hand.name!r}'s real_model.bodies "
+                                    f"{sorted(hand.real_model.bodies)}, got {link!r}")
         out[str(site)] = str(link)
     return out

@@ -65,10 +65,6 @@ class RetargetSpec:
     wrist: RobotPoint
     fingertips: tuple[Fingertip, ...]   # thumb first
 
-    @property
-    def thumb(self) -> Fingertip:
-        return self.fingertips[0]
-
 
 def _fail(hand: HandDescription, field: str, msg: str):
     raise DescriptionError(f"{hand.path}: field 'retarget.{field}': {msg}")

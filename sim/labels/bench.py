@@ -26,9 +26,7 @@ from sim.labels.occupancy import OccupancyLabeler
 from sim.labels.segmentation import Segmenter
 from sim.offscreen import OffscreenRenderer
 from sim.registry import SensorProfile, names, sensor_profile
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
-from sim.tasks import load_task
+from sim.scene.builder import demonstration_scene
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
 STEPS_BETWEEN_FRAMES = 3     # control steps between frames: the 20 Hz spacing
@@ -38,8 +36,7 @@ CAMERA_KEYS = ("scene_update", "rgb", "depth", "depth_and_geom_ids", "segmentati
 def run_bench(profile: str | SensorProfile = "paper", frames: int = 10, task: str = TASK,
               embodiment: str = EMBODIMENT) -> dict:
     profile = sensor_profile(profile) if isinstance(profile, str) else profile
-    spec = load_task(task)
-    scene = build_scene(spec, embodiment, demonstration_sample(spec, task_seed(names("tasks").index(task), 0)))
+    scene = demonstration_scene(task, embodiment)
     model, data = scene.model, scene.home_data()
     t0 = time.perf_counter()
     ids = LabelIds.from_scene(scene)

@@ -197,3 +197,13 @@ def _perturb_cameras(model: mujoco.MjModel, offsets: dict[str, dict], look_dista
         mujoco.mju_mulQuat(final, turned, np.asarray(euler_quat(off["rpy_deg"])))
         model.cam_pos[cid] = pos
         model.cam_quat[cid] = final
+
+
+def demonstration_scene(task: str, embodiment: str, index: int = 0) -> Scene:
+    """The scene of a task's demonstration `index` on an embodiment (its seed and scene sample)."""
+    from sim.registry import names
+    from sim.scene.sample import demonstration_sample, task_seed
+    from sim.tasks import load_task
+
+    spec = load_task(task)
+    return build_scene(spec, embodiment, demonstration_sample(spec, task_seed(names("tasks").index(task), index)))

@@ -108,8 +108,8 @@ class TeleopCommander:
     def _arm(self, s: _Side, target: Transform) -> tuple[bool, str]:
         quat = target.quat
         result = s.kin.ik(target.pos, quat, s.arm_q, max_iters=FAST_IK_ITERS)
-        if not result.success:
-            result = s.kin.ik(target.pos, quat, s.arm_q, max_iters=SLOW_IK_ITERS)
+        if not result.success:      # continue where the fast try stopped: the same 300 iterations in all
+            result = s.kin.ik(target.pos, quat, result.q, max_iters=SLOW_IK_ITERS - FAST_IK_ITERS)
         if not result.success:
             return False, (f"{s.name} wrist: unreachable (IK {result.pos_err_m * 1000:.1f} mm / "
                            f"{np.degrees(result.rot_err_rad):.1f} deg off); last arm target held")

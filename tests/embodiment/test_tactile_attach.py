@@ -16,10 +16,10 @@ def embodiments_dir(tmp_path, monkeypatch):
     description.load_embodiment.cache_clear()
 
 
-def _write(folder, overrides):
-    raw = yaml.safe_load((description.CATALOG_DIR / "embodiments" / "ur5_rh5dg2.yaml").read_text())
+def _write(folder, overrides, name="ur5_rh5dg2"):
+    raw = yaml.safe_load((description.CATALOG_DIR / "embodiments" / f"{name}.yaml").read_text())
     raw["tactile_attach"] = overrides
-    (folder / "ur5_rh5dg2.yaml").write_text(yaml.safe_dump(raw))
+    (folder / f"{name}.yaml").write_text(yaml.safe_dump(raw))
 
 
 def _site_body(layout_model, site):
@@ -53,3 +53,11 @@ def test_bad_overrides_name_the_file_and_field(embodiments_dir, overrides, field
     _write(embodiments_dir, overrides)
     with pytest.raises(description.DescriptionError, match=rf"ur5_rh5dg2.yaml: field '{field}'"):
         description.load_embodiment("ur5_rh5dg2")
+
+
+def test_an_override_must_name_a_link_the_real_hand_model_maps_too(embodiments_dir):
+    _write(embodiments_dir, {"index_tip": "ffmiddle"}, name="ur5_shadow")     # not in shadow's real_model.bodies
+    with pytest.raises(description.DescriptionError, match=r"field 'tactile_attach.index_tip': .*real_model.bodies"):
+        description.load_embodiment("ur5_shadow")
+    _write(embodiments_dir, {"index_tip": "ffproximal"}, name="ur5_shadow")
+    assert description.load_embodiment("ur5_shadow").tactile_attach == {"index_tip": "ffproximal"}
