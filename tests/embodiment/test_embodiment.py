@@ -14,7 +14,7 @@ import yaml
 import sim.physics as physics
 from sim.embodiment import ArmKinematics, description, embodiment_names, load_embodiment
 from sim.embodiment.builder import home_arm_angles
-from sim.embodiment.description import CAMERA_NAMES, mat_to_quat, quat_to_mat
+from sim.embodiment.description import CAMERA_NAMES, THUMB, mat_to_quat, quat_to_mat
 from sim.embodiment.mirror import M
 from sim.embodiment.reach import reach_along
 from sim.render import MJ_TO_CV, intrinsic_matrix
@@ -127,24 +127,29 @@ def test_joint_limits_respected(embodiment, scene):
 
 def test_coupled_joints_follow_their_master(embodiment, scene):
     """Mimic joints are joint equalities: with the hand driven to mid-range, every coupled joint sits
-    where its coupling polynomial of the master puts it."""
+    where its coupling polynomial of the master puts it. The thumb and the fingers are driven in turn
+    (the other kept open): together at mid-range a thumb that can pinch presses on the fingertips."""
     model, layout = scene
     hand = load_embodiment(embodiment).hand
-    data = fresh_data(model, layout)
-    ctrl = layout.home_ctrl.copy()
-    for s in SIDES:
-        for a in hand.actuators:
-            lo, hi = model.actuator_ctrlrange[model.actuator(f"{s}_{a.name}").id]
-            ctrl[layout.actuator_names.index(f"{s}_{a.name}")] = (lo + hi) / 2
-    for _ in range(60):
-        physics.step_control(model, data, ctrl)
     assert model.neq == 2 * len(hand.couplings)
-    for s in SIDES:
-        for c in hand.couplings:
-            master = data.qpos[model.joint(f"{s}_{c.master}").qposadr[0]]
-            follower = data.qpos[model.joint(f"{s}_{c.joint}").qposadr[0]]
-            expected = np.clip(sum(k * master ** i for i, k in enumerate(c.polycoef)), *hand.joint(c.joint).range)
-            assert abs(follower - expected) < 0.01, f"{s}_{c.joint} = {follower:.3f}, coupling gives {expected:.3f}"
+    thumb_joints = {j.name for link in hand.links if link.finger == THUMB for j in link.joints}
+    for thumb_turn in (True, False):
+        data = fresh_data(model, layout)
+        ctrl = layout.home_ctrl.copy()
+        for s in SIDES:
+            for a in hand.actuators:
+                if (a.joint in thumb_joints) == thumb_turn:
+                    lo, hi = model.actuator_ctrlrange[model.actuator(f"{s}_{a.name}").id]
+                    ctrl[layout.actuator_names.index(f"{s}_{a.name}")] = (lo + hi) / 2
+        for _ in range(60):
+            physics.step_control(model, data, ctrl)
+        for s in SIDES:
+            for c in hand.couplings:
+                master = data.qpos[model.joint(f"{s}_{c.master}").qposadr[0]]
+                follower = data.qpos[model.joint(f"{s}_{c.joint}").qposadr[0]]
+                expected = np.clip(sum(k * master ** i for i, k in enumerate(c.polycoef)),
+                                   *hand.joint(c.joint).range)
+                assert abs(follower - expected) < 0.01, f"{s}_{c.joint} = {follower:.3f}, coupling gives {expected:.3f}"
 
 
 def _peak_speeds(model, data, ctrl, dofs, seconds: float) -> np.ndarray:
