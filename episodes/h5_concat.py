@@ -3,7 +3,8 @@
 Per-frame datasets (extendable along axis 0, as `EpisodeWriter` makes them) are concatenated; the
 rest (intrinsics, surface maps, names) is the same in every part and copied once. Image chunks hold
 one frame, so they are copied as compressed bytes (`read_direct_chunk`), never decoded and
-recompressed: joining costs little next to rendering.
+recompressed: joining costs little next to rendering. The joined datasets keep each part's chunking
+and filter pipeline (plugin filters included).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import h5py
+import hdf5plugin  # noqa: F401  (registers the image filters of episodes.writer)
 import numpy as np
 
 from episodes.atomic import atomic_path
@@ -60,17 +62,36 @@ def concat_frames(parts: list[Path], out_path: Path, frame_axis_datasets: tuple[
             f.close()
 
 
+def _filters(ds: h5py.Dataset) -> tuple:
+    """The dataset's filter pipeline (id, flags, parameters per filter), plugin filters included."""
+    dcpl = ds.id.get_create_plist()
+    return tuple(dcpl.get_filter(i)[:3] for i in range(dcpl.get_nfilters()))
+
+
+def _create_like(out: h5py.File, name: str, src: h5py.Dataset, total: int) -> h5py.Dataset:
+    """An extendable dataset of `total` frames with the source's chunks and filters (its creation
+    property list): plugin filters (hdf5plugin's Zstd, Blosc) carry over, which h5py's
+    `compression=` keyword cannot name."""
+    if src.chunks is None:      # a small contiguous dataset along the frame axis: no filters to keep
+        return out.create_dataset(name, shape=(total, *src.shape[1:]), maxshape=(None, *src.shape[1:]),
+                                  dtype=src.dtype, chunks=True)
+    space = h5py.h5s.create_simple((total, *src.shape[1:]), (h5py.h5s.UNLIMITED, *src.shape[1:]))
+    links = h5py.h5p.create(h5py.h5p.LINK_CREATE)
+    links.set_create_intermediate_group(True)
+    dsid = h5py.h5d.create(out.id, name.encode(), src.id.get_type(), space, dcpl=src.id.get_create_plist(),
+                           lcpl=links)
+    return h5py.Dataset(dsid)
+
+
 def _concat(out: h5py.File, name: str, sources: list[h5py.Dataset]) -> None:
     src = sources[0]
     total = sum(s.shape[0] for s in sources)
-    dst = out.create_dataset(name, shape=(total, *src.shape[1:]), maxshape=(None, *src.shape[1:]),
-                             dtype=src.dtype, chunks=src.chunks or True, compression=src.compression,
-                             compression_opts=src.compression_opts, shuffle=src.shuffle)
+    dst = _create_like(out, name, src, total)
     one_frame_chunks = src.chunks is not None and src.chunks[0] == 1
     start = 0
     for s in sources:
         n = s.shape[0]
-        if one_frame_chunks and s.chunks == src.chunks and s.compression == src.compression:
+        if one_frame_chunks and s.chunks == src.chunks and _filters(s) == _filters(src):
             tail = (0,) * (len(s.shape) - 1)
             for i in range(n):
                 mask, chunk = s.id.read_direct_chunk((i, *tail))

@@ -37,9 +37,10 @@ log = logging.getLogger(__name__)
 class LabelFrames:
     """``static()`` once per file, then ``capture(data, seg_images)`` -> (datasets, error text) per frame.
 
-    `seg_images`: camera id -> that frame's segmentation image, either the [H, W] geom ids of
-    `sim.render.CameraRig(..., geom_ids=True)` (read from the depth pass) or mujoco.Renderer's
-    [H, W, 2] (objid, objtype); needed only when `needs_segmentation`."""
+    `seg_images`: camera id -> that frame's segmentation, one of the forms `Segmenter.masks` takes:
+    the `SegmentIds` of `sim.render.CameraRig(..., segments=True)` (read from the depth pass), an
+    [H, W] geom-id image or mujoco.Renderer's [H, W, 2] (objid, objtype); needed only when
+    `needs_segmentation`."""
 
     def __init__(self, scene, profile: SensorProfile):
         self.profile = profile

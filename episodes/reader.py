@@ -1,4 +1,7 @@
-"""Read any modality of an episode for a frame range without reading the rest of the file."""
+"""Read any modality of an episode for a frame range without reading the rest of the file.
+
+Image datasets use HDF5 plugin filters (Zstd, Blosc: `episodes.writer.image_filter`); importing this
+module registers them. Plain h5py needs `import hdf5plugin` first."""
 
 from __future__ import annotations
 
@@ -6,6 +9,7 @@ import json
 from pathlib import Path
 
 import h5py
+import hdf5plugin  # noqa: F401  (registers the image filters)
 import numpy as np
 
 from episodes import schema

@@ -28,7 +28,7 @@ class FrameRenderer:
         self.profile = profile
         listed = any(m in profile.modalities for m in schema.LABEL_MODALITIES)
         self.labels = LabelFrames(scene, profile) if listed else None   # RGB-D-only profiles skip label setup
-        self.cameras = CameraRig(scene.model, profile, geom_ids=bool(self.labels and self.labels.needs_segmentation))
+        self.cameras = CameraRig(scene.model, profile, segments=bool(self.labels and self.labels.needs_segmentation))
         self.tactile = TactileFrames(scene, profile) if profile.tactile_enabled else None
         self._seconds: dict[str, float] = defaultdict(float)
 
@@ -52,14 +52,14 @@ class FrameRenderer:
         except Exception as exc:   # keep the episode: flag the frame instead of aborting
             errors.append(f"render failed: {exc}")
             shots = self._blank_shots()
-        geom_ids = {cam: shot.pop("geom_ids") for cam, shot in shots.items() if "geom_ids" in shot}
+        segments = {cam: shot.pop("segments") for cam, shot in shots.items() if "segments" in shot}
         for cam, T in self.cameras.extrinsics(data).items():
             frame[f"cameras/{cam}/extrinsic_world_from_cam"] = T
             for key, img in shots[cam].items():
                 frame[f"cameras/{cam}/{key}"] = img
         if self.labels is not None:
             t0 = time.perf_counter()
-            labels, label_error = self.labels.capture(data, geom_ids)
+            labels, label_error = self.labels.capture(data, segments)
             self._seconds["labels"] += time.perf_counter() - t0
             frame.update(labels)
             if label_error:
@@ -74,7 +74,8 @@ class FrameRenderer:
         return frame, "; ".join(errors)
 
     def seconds(self) -> dict[str, float]:
-        """Time spent so far per part: camera_scene_update, camera_rgb, camera_depth_and_ids, labels, tactile."""
+        """Time spent so far per part: camera_scene_update, camera_rgb, camera_depth_and_ids (GL render and
+        read-back), camera_decode (buffers -> metric depth and geom ids), labels, tactile."""
         return {**{f"camera_{k}": v for k, v in self.cameras.seconds.items()}, **self._seconds}
 
     def _blank_shots(self) -> dict:

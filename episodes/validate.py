@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 import h5py
+import hdf5plugin  # noqa: F401  (registers the image filters: a file is checked by reading it)
 import numpy as np
 
 from episodes import schema

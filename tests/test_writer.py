@@ -33,3 +33,82 @@ def test_a_failed_episode_leaves_nothing(tmp_path):
             w.append({"pose": np.zeros(3)})
             raise RuntimeError("render crashed")
     assert list(tmp_path.iterdir()) == []
+
+
+def _pipeline(ds: h5py.Dataset) -> list[int]:
+    dcpl = ds.id.get_create_plist()
+    return [dcpl.get_filter(i)[0] for i in range(dcpl.get_nfilters())]
+
+
+def test_images_use_the_plugin_codecs_and_a_join_keeps_them_chunk_for_chunk(tmp_path):
+    import hdf5plugin
+
+    from episodes.h5_concat import concat_frames
+
+    rng = np.random.default_rng(0)
+    frames = [{"rgb": rng.integers(0, 255, (48, 64, 3), np.uint8), "depth": rng.random((48, 64), np.float32),
+               "mask": (rng.random((48, 64)) < 0.1).astype(np.uint16)} for _ in range(6)]
+    for name, part in (("a.h5", frames[:4]), ("b.h5", frames[4:])):
+        with EpisodeWriter(tmp_path / name, {}) as w:
+            for frame in part:
+                w.append(frame)
+    concat_frames([tmp_path / "a.h5", tmp_path / "b.h5"], tmp_path / "joined.h5")
+    with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "joined.h5") as f:
+        assert _pipeline(f["rgb"]) == _pipeline(f["mask"]) == [hdf5plugin.ZSTD_ID]
+        assert _pipeline(f["depth"]) == [hdf5plugin.BLOSC_ID]
+        for key in ("rgb", "depth", "mask"):
+            assert _pipeline(f[key]) == _pipeline(a[key]) and f[key].chunks == a[key].chunks
+            np.testing.assert_array_equal(f[key][()], np.stack([fr[key] for fr in frames]))
+            # the joined chunks are the parts' compressed bytes, not re-encoded
+            assert f[key].id.read_direct_chunk((1,) + (0,) * (f[key].ndim - 1)) == \
+                a[key].id.read_direct_chunk((1,) + (0,) * (a[key].ndim - 1))
+
+
+def test_streams_grow_past_their_allocation_and_trim_to_the_frames_written(tmp_path):
+    """A stream is grown 64 frames at a time: 150 frames, a key that starts late and one that stops
+    early come back with exactly their frames (a missing late frame is a zero row, as buffered values)."""
+    image = np.zeros((32, 32), np.float32)
+    with EpisodeWriter(tmp_path / "e.h5", {}) as w:
+        for k in range(150):
+            image[:] = k
+            frame = {"image": image}
+            if k >= 70:
+                frame["late"] = image + 1000
+            if k < 65:
+                frame["early"] = image - 1
+            w.append(frame)
+    with h5py.File(tmp_path / "e.h5") as f:
+        assert f["image"].shape == (150, 32, 32) and f["image"][:, 0, 0].tolist() == list(range(150))
+        assert f["late"].shape == (150, 32, 32) and f["late"][:70].max() == 0
+        assert f["late"][70:, 3, 3].tolist() == [1000 + k for k in range(70, 150)]
+        assert f["early"].shape == (65, 32, 32) and f["early"][:, 1, 1].tolist() == [k - 1 for k in range(65)]
+
+
+def test_compressed_bytes_do_not_depend_on_blosc_threads(tmp_path):
+    """Depth maps go through Blosc, whose output depends on its thread count; the writer pins it, so
+    runs under any BLOSC_NTHREADS give the same chunk bytes (the manifest hashes the files)."""
+    import os
+    import subprocess
+    import sys
+
+    script = f"""
+import hashlib, sys
+sys.path.insert(0, {str(__import__('pathlib').Path(__file__).resolve().parents[1])!r})
+import numpy as np, h5py
+from episodes.writer import EpisodeWriter
+depth = np.random.default_rng(0).random((5, 480, 640)).astype(np.float32) * 3   # paper-sized: Blosc splits it
+with EpisodeWriter(sys.argv[1], {{}}) as w:
+    for d in depth:
+        w.append({{"depth": d}})
+with h5py.File(sys.argv[1]) as f:
+    ds = f["depth"]
+    print(hashlib.sha256(b"".join(ds.id.read_direct_chunk(ds.id.get_chunk_info(i).chunk_offset)[1]
+                                  for i in range(ds.id.get_num_chunks()))).hexdigest())
+"""
+    hashes = set()
+    for threads, name in (("1", "a.h5"), ("4", "b.h5"), ("4", "c.h5")):
+        env = {**os.environ, "BLOSC_NTHREADS": threads}
+        out = subprocess.run([sys.executable, "-c", script, str(tmp_path / name)], env=env, check=True,
+                             capture_output=True, text=True)
+        hashes.add(out.stdout.strip())
+    assert len(hashes) == 1

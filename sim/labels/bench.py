@@ -26,6 +26,7 @@ from sim.labels.occupancy import OccupancyLabeler
 from sim.labels.segmentation import Segmenter
 from sim.offscreen import OffscreenRenderer
 from sim.registry import SensorProfile, names, sensor_profile
+from sim.render import apply_antialias
 from sim.scene.builder import demonstration_scene
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
@@ -47,6 +48,7 @@ def run_bench(profile: str | SensorProfile = "paper", frames: int = 10, task: st
     setup_s = time.perf_counter() - t0
     seconds = dict.fromkeys(CAMERA_KEYS + ("box3d", "occupancy"), 0.0)
     clock = time.perf_counter
+    apply_antialias(model, profile)     # as the render stage's camera rig
     renderer = OffscreenRenderer(model, profile.width, profile.height)
     try:
         for _ in range(frames):
@@ -60,9 +62,9 @@ def run_bench(profile: str | SensorProfile = "paper", frames: int = 10, task: st
                 marks.append(clock())
                 renderer.depth_and_geoms(False)
                 marks.append(clock())
-                _, geom_ids = renderer.depth_and_geoms(True)
+                _, segments = renderer.decode(*renderer.id_pass(True))     # as the render stage reads them
                 marks.append(clock())
-                masks = segmenter.masks(geom_ids)
+                masks = segmenter.masks(segments)
                 marks.append(clock())
                 box2d.capture(data, cam, masks.instance)
                 marks.append(clock())

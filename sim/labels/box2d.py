@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 import trimesh
-from scipy import ndimage
 
 from sim.labels.geometry import GeomShapes, check_solid
 from sim.labels.ids import LabelIds
@@ -41,13 +40,33 @@ class Boxes2D:
 
 
 def mask_boxes(instance: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """xyxy [count, 4] (NaN when absent) and pixel counts [count] of instances 1..count."""
+    """xyxy [count, 4] (NaN when absent) and pixel counts [count] of instances 1..count.
+
+    Objects cover a few percent of an image: the rows and columns showing any object bound a crop,
+    and only the crop's object pixels are visited. Counts of (instance, row) and (instance, column)
+    pairs give each instance's occupied rows and columns."""
     xyxy = np.full((count, 4), np.nan, np.float32)
-    for k, found in enumerate(ndimage.find_objects(instance, max_label=count)):
-        if found is not None:
-            rows, cols = found
-            xyxy[k] = (cols.start, rows.start, cols.stop, rows.stop)
-    pixels = np.bincount(instance.ravel(), minlength=count + 1)[1:count + 1]
+    any_rows = np.flatnonzero(instance.any(axis=1))
+    if not any_rows.size:
+        return xyxy, np.zeros(count, np.int64)
+    any_cols = np.flatnonzero(instance.any(axis=0))
+    top, left = any_rows[0], any_cols[0]
+    crop = instance[top: any_rows[-1] + 1, left: any_cols[-1] + 1]
+    height, width = crop.shape
+    where = np.flatnonzero(crop)
+    labels = crop.ravel()[where].astype(np.intp)
+    if labels.max() > count:
+        raise ValueError(f"instance mask: id {int(labels.max())} above the {count} objects")
+    rows, cols = np.divmod(where, width)
+    in_row = np.bincount(labels * height + rows, minlength=(count + 1) * height).reshape(count + 1, height)[1:] > 0
+    in_col = np.bincount(labels * width + cols, minlength=(count + 1) * width).reshape(count + 1, width)[1:] > 0
+    pixels = np.bincount(labels, minlength=count + 1)[1:]
+    seen = pixels > 0
+    # first occupied column / row, and last + 1 (argmax finds the first True)
+    xyxy[seen, 0] = left + in_col[seen].argmax(axis=1)
+    xyxy[seen, 1] = top + in_row[seen].argmax(axis=1)
+    xyxy[seen, 2] = left + width - in_col[seen, ::-1].argmax(axis=1)
+    xyxy[seen, 3] = top + height - in_row[seen, ::-1].argmax(axis=1)
     return xyxy, pixels.astype(np.int64)
 
 

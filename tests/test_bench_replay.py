@@ -1,0 +1,18 @@
+"""`b2d bench replay` accounts for every millisecond of a frame once: the per-frame parts add up to the
+per-frame time, the once-per-file set-up is reported apart, and the unavoidable share counts only the
+GL passes and tactile ray casting (decoding the GL buffers is overhead)."""
+
+import pytest
+
+from b2d_cli.benchmarks import UNAVOIDABLE_RENDER_PARTS, bench_replay
+
+
+def test_replay_bench_parts_add_up_and_setup_is_reported_apart():
+    out = bench_replay("preview", steps=24)
+    share = out["share"]
+    assert "render_setup" not in share and out["one_off_per_render_file_ms"]["render_setup"] > 0
+    assert sum(share.values()) == pytest.approx(1.0, abs=0.01)
+    assert "render_camera_decode" in share and "camera_decode" not in UNAVOIDABLE_RENDER_PARTS
+    unavoidable = sum(share[f"render_{k}"] for k in UNAVOIDABLE_RENDER_PARTS if f"render_{k}" in share)
+    assert out["unavoidable_render_and_raycast_share"] == pytest.approx(unavoidable, abs=0.002)
+    assert out["antialias"] is False and out["shadows"] is False
