@@ -11,14 +11,38 @@ Z_UP = np.array([0.0, 0.0, 1.0])
 
 def length(v) -> float:
     """Euclidean length of a small vector; ~4x cheaper than np.linalg.norm, which the evaluator
-    calls dozens of times per step (recorder overhead, `b2d bench recorder`)."""
-    v = np.asarray(v, dtype=float)
-    return math.sqrt(float(np.dot(v, v)))
+    calls dozens of times per step (recorder overhead, `b2d bench recorder`). Kept on np.dot (BLAS):
+    a Python sum of squares rounds differently in ~10% of cases, and recorded results must not move."""
+    if type(v) is not np.ndarray or v.dtype != np.float64:
+        v = np.asarray(v, dtype=float)
+    return math.sqrt(v.dot(v))
+
+
+# The evaluator asks for one object's rotation several times per update (each predicate on it, the
+# monitors): a small cache keyed by the quaternion's bytes computes it once per object and update.
+# The matrices are read-only, so a caller cannot change a cached one.
+_ROTATIONS: dict[bytes, np.ndarray] = {}
+_ROTATIONS_MAX = 256
 
 
 def rotation(quat: np.ndarray) -> np.ndarray:
-    """3x3 rotation matrix of a wxyz quaternion (normalised first)."""
-    w, x, y, z = np.asarray(quat, dtype=float) / length(quat)
+    """3x3 rotation matrix of a wxyz quaternion (normalised first), read-only."""
+    q = np.asarray(quat, dtype=float)
+    key = q.tobytes() if q.shape == (4,) else None
+    rot = _ROTATIONS.get(key) if key is not None else None
+    if rot is None:
+        rot = _rotation(q)
+        rot.flags.writeable = False
+        if key is not None:
+            if len(_ROTATIONS) >= _ROTATIONS_MAX:
+                _ROTATIONS.clear()
+            _ROTATIONS[key] = rot
+    return rot
+
+
+def _rotation(q: np.ndarray) -> np.ndarray:
+    # Python floats (tolist) instead of numpy scalars: the same IEEE arithmetic, ~3x less overhead
+    w, x, y, z = (q / length(q)).tolist()
     return np.array(
         [
             [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
@@ -31,7 +55,9 @@ def rotation(quat: np.ndarray) -> np.ndarray:
 def angle_deg(a: np.ndarray, b: np.ndarray) -> float:
     """Angle between two vectors in degrees."""
     c = float(np.dot(a, b) / (length(a) * length(b)))
-    return float(np.degrees(np.arccos(np.clip(c, -1.0, 1.0))))
+    # clamped by hand: np.clip on a scalar goes through a slow Python wrapper (NaN stays NaN, as there)
+    c = 1.0 if c > 1.0 else -1.0 if c < -1.0 else c
+    return float(np.degrees(np.arccos(c)))
 
 
 def tilt_deg(quat: np.ndarray, local_axis: np.ndarray) -> float:
@@ -60,7 +86,10 @@ def axis_extent(local_axis: np.ndarray, half_extents: np.ndarray) -> float:
     return float(np.abs(local_axis) @ half_extents)
 
 
+_AXES = {"xy": slice(0, 2), "xyz": slice(0, 3), "z": slice(2, 3)}
+
+
 def masked_distance(a: np.ndarray, b: np.ndarray, axes: str) -> float:
     """Distance between two points over 'xy', 'xyz' or 'z'."""
-    sel = {"xy": slice(0, 2), "xyz": slice(0, 3), "z": slice(2, 3)}[axes]
+    sel = _AXES[axes]
     return float(length(np.asarray(a, dtype=float)[sel] - np.asarray(b, dtype=float)[sel]))

@@ -40,7 +40,7 @@ def lifted_and_held(s: EvalStep, name: str, lift_min: float, hand_max_dist: floa
 
 def steady(o: ObjectState, cfg: dict) -> bool:
     """Linear and angular speed within the grasp block's stable_lin_vel / stable_ang_vel."""
-    return float(length(o.lin_vel)) <= cfg["stable_lin_vel"] and float(length(o.ang_vel)) <= cfg["stable_ang_vel"]
+    return o.speed <= cfg["stable_lin_vel"] and o.spin <= cfg["stable_ang_vel"]
 
 
 class GraspMonitor:
@@ -55,37 +55,40 @@ class GraspMonitor:
         self.reset()
 
     def reset(self) -> None:
+        # plain Python lists: the per-object bookkeeping below runs every update, and numpy scalar
+        # reads and writes cost several times more than list items (same IEEE arithmetic)
         n = len(self.objects)
-        self.hold_s = np.zeros(n)
-        self.slips = np.zeros(n, dtype=int)
-        self.slipping = np.zeros(n, dtype=bool)
+        self.hold_s = [0.0] * n
+        self.slips = [0] * n
+        self.slipping = [False] * n
         self.prev_rel: list[np.ndarray | None] = [None] * n
 
     def _palm_offset(self, s: EvalStep, pos: np.ndarray) -> np.ndarray | None:
         rels = [pos - np.asarray(p, float) for p in s.state.hands.values()]
-        return min(rels, key=np.linalg.norm) if rels else None
+        return min(rels, key=length) if rels else None     # = np.linalg.norm for vectors, bit for bit
 
     def update(self, s: EvalStep) -> np.ndarray:
         c = self.cfg
-        scores = np.zeros(len(self.objects))
+        lift_min, hand_max_dist, dt = c["lift_min"], c["hand_max_dist"], s.dt
+        scores = []
         for i, name in enumerate(self.objects):
             o = s.obj(name)
             pos = np.asarray(o.pos, dtype=float)
-            v, w = float(length(o.lin_vel)), float(length(o.ang_vel))
-            lifted = pos[2] - s.initial_obj(name).pos[2] >= c["lift_min"]
-            held = lifted_and_held(s, name, c["lift_min"], c["hand_max_dist"])
+            v, w = o.speed, o.spin
+            lifted = pos[2] - s.initial_obj(name).pos[2] >= lift_min
+            held = lifted_and_held(s, name, lift_min, hand_max_dist)
             stable = v <= c["stable_lin_vel"] and w <= c["stable_ang_vel"]
-            self.hold_s[i] = self.hold_s[i] + s.dt if held else 0.0
+            hold = self.hold_s[i] = self.hold_s[i] + dt if held else 0.0
             rel = self._palm_offset(s, pos) if held else None
             slipping = False
             if rel is not None and self.prev_rel[i] is not None:
-                slipping = float(length(rel - self.prev_rel[i])) / s.dt > c["slip_speed"]
+                slipping = float(length(rel - self.prev_rel[i])) / dt > c["slip_speed"]
             self.slips[i] += int(slipping and not self.slipping[i])
             self.slipping[i], self.prev_rel[i] = slipping, rel
             big_l = 1.0 if lifted else 0.0
             big_h = 1.0 if held else 0.35 if lifted and stable else 0.15 if lifted else 0.0
             big_m = math.exp(-0.5 * (v / c["sigma_v"] + w / c["sigma_w"]))
-            big_q = 0.75 + 0.25 * min(1.0, self.hold_s[i] / c["hold_min_s"]) if held else 1.0
+            big_q = 0.75 + 0.25 * min(1.0, hold / c["hold_min_s"]) if held else 1.0
             big_a = 1.0 - min(1.0, self.slips[i] / c["max_slips"])
-            scores[i] = big_l * big_h * big_m * big_q * big_a
-        return scores
+            scores.append(big_l * big_h * big_m * big_q * big_a)
+        return np.array(scores, dtype=float)

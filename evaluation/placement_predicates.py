@@ -44,7 +44,7 @@ class Inside(Condition):
     def __call__(self, s: EvalStep) -> bool:
         c = s.obj(self.container)
         local = to_local(point_of(s, self.object, self.object_offset), c.pos, c.quat) - self.offset
-        return bool(np.all(np.abs(local) <= self.half))
+        return bool((np.abs(local) <= self.half).all())
 
 
 @register("on_surface")
@@ -76,12 +76,16 @@ class OnSurface(Condition):
         if self.surface == TABLE:
             return s.state.table_height, True
         su = s.obj(self.surface)
-        if self.floor is None:
-            top = su.pos[2] + vertical_half_extent(su.quat, self.half)
-        else:
-            top = (su.pos + rotation(su.quat) @ self.floor)[2]
+        key = ("support_top", self.surface)     # half and floor follow from the surface alone
+        top = s.memo.get(key)
+        if top is None:
+            if self.floor is None:
+                top = su.pos[2] + vertical_half_extent(su.quat, self.half)
+            else:
+                top = (su.pos + rotation(su.quat) @ self.floor)[2]
+            s.memo[key] = top
         if self.max_xy is None:
-            ok_xy = bool(np.all(np.abs(to_local(o.pos, su.pos, su.quat)[:2]) <= self.half[:2]))
+            ok_xy = bool((np.abs(to_local(o.pos, su.pos, su.quat)[:2]) <= self.half[:2]).all())
         else:
             ok_xy = masked_distance(o.pos, su.pos, "xy") <= self.max_xy
         return float(top), ok_xy
@@ -158,7 +162,7 @@ class InZone(Condition):
     def __call__(self, s: EvalStep) -> bool:
         xy = np.asarray(s.obj(self.object).pos, dtype=float)[:2]
         if "xy_min" in self.zone:
-            return bool(np.all(xy >= self.zone["xy_min"]) and np.all(xy <= self.zone["xy_max"]))
+            return bool((xy >= self.zone["xy_min"]).all() and (xy <= self.zone["xy_max"]).all())
         return float(length(xy - self.zone["center_xy"])) <= self.zone["radius"]
 
 

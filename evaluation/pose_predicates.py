@@ -82,8 +82,7 @@ class AtRest(Condition):
 
     def __call__(self, s: EvalStep) -> bool:
         states = [s.obj(n) for n in self.objects]
-        return all(length(o.lin_vel) <= self.max_lin and length(o.ang_vel) <= self.max_ang
-                   for o in states)
+        return all(o.speed <= self.max_lin and o.spin <= self.max_ang for o in states)
 
 
 @register("lifted")

@@ -61,7 +61,7 @@ class SafetyMonitor:
         if z is None:
             return False
         if "xy_min" in z:
-            return bool(np.any(xy < z["xy_min"]) or np.any(xy > z["xy_max"]))
+            return bool((xy < z["xy_min"]).any() or (xy > z["xy_max"]).any())
         return float(length(xy - z["center_xy"])) > z["radius"]
 
     def dropped(self, state: SceneState, name: str) -> bool:
@@ -77,8 +77,8 @@ class SafetyMonitor:
         """A tracked object moves faster than the configured linear (or angular) limit."""
         for name in self.speed_objects:
             o = _obj(state, name)
-            if length(o.lin_vel) > self.max_lin:
+            if o.speed > self.max_lin:
                 return True
-            if self.max_ang is not None and length(o.ang_vel) > self.max_ang:
+            if self.max_ang is not None and o.spin > self.max_ang:
                 return True
         return False

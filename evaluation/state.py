@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from evaluation.geometry import length
+
 HANDS = ("left", "right")
 TABLE = "table"  # reserved surface / contact name
 
@@ -24,12 +26,38 @@ class ObjectInfo:
     mouth_axis: np.ndarray | None = None  # bottles/pourers: local axis the mouth points along (default +z)
 
 
+class _once:
+    """A property computed on first access and then kept in the instance ``__dict__`` (like
+    functools.cached_property without its per-access lock, which costs more than the value)."""
+
+    def __init__(self, fget):
+        self.fget, self.name = fget, fget.__name__
+        self.__doc__ = fget.__doc__
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.fget(obj)
+        return value
+
+
 @dataclass(frozen=True)
 class ObjectState:
     pos: np.ndarray  # (3,) world
     quat: np.ndarray  # (4,) wxyz world
     lin_vel: np.ndarray  # (3,) world
     ang_vel: np.ndarray  # (3,) world
+
+    # Speeds, computed once per state: the grasp, safety and at_rest checks each ask for them.
+    @_once
+    def speed(self) -> float:
+        """|lin_vel|, m/s."""
+        return length(self.lin_vel)
+
+    @_once
+    def spin(self) -> float:
+        """|ang_vel|, rad/s."""
+        return length(self.ang_vel)
 
 
 @dataclass(frozen=True)

@@ -2,9 +2,10 @@
 robot and object state and the evaluator state, plus the seed, scene sample and exact initial
 state, so the replay stage can reproduce the episode bit for bit.
 
-Its per-step work is a handful of array copies into preallocated buffers (measured by
-`b2d bench recorder`). Operators driven by a stream (teleop/session.py) also report, per step,
-the stream's ``StepFlag`` bits and their reasons; they go into ``step_flags`` / ``step_reasons``.
+Its per-step storing is a handful of fancy-index reads from MjData into preallocated buffer rows;
+`b2d bench recorder` measures it, the scene snapshot and the evaluator update against the physics
+step. Operators driven by a stream (teleop/session.py) also report, per step, the stream's
+``StepFlag`` bits and their reasons; they go into ``step_flags`` / ``step_reasons``.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 
 from episodes.raw import RawRecording
 from evaluation.evaluator import EpisodeEvaluator
+from evaluation.records import StepRecord
 from sim import physics
 from sim.scene.builder import Scene
 from sim.scene.state import SceneObserver
@@ -35,19 +37,19 @@ class Operator(Protocol):
 
 
 class StepBuffer:
-    """Preallocated per-step arrays, grown by doubling."""
+    """Preallocated per-step arrays, grown by doubling; a step claims its row with ``next_row``."""
 
     def __init__(self, shapes: dict[str, tuple], dtypes: dict[str, type], capacity: int = 1024):
         self.arrays = {k: np.zeros((capacity, *s), dtype=dtypes.get(k, np.float64)) for k, s in shapes.items()}
         self.count = 0
         self.notes: dict[int, str] = {}      # step -> text, only for the (rare) steps that have one
 
-    def push(self, **values) -> None:
+    def next_row(self) -> int:
+        """Claim the next step's row (growing the arrays when full) and return its index."""
         if self.count == next(iter(self.arrays.values())).shape[0]:
             self.arrays = {k: np.concatenate([a, np.zeros_like(a)]) for k, a in self.arrays.items()}
-        for key, value in values.items():
-            self.arrays[key][self.count] = value
         self.count += 1
+        return self.count - 1
 
     def result(self) -> dict[str, np.ndarray]:
         return {k: a[: self.count].copy() for k, a in self.arrays.items()}
@@ -72,19 +74,31 @@ def new_buffer(scene: Scene, n_stages: int) -> StepBuffer:
         {"terminal": bool, "stage_latched": bool, "step_flags": np.uint8})
 
 
-def record_step(scene: Scene, observer: SceneObserver, evaluator: EpisodeEvaluator, buf: StepBuffer,
+def record_step(observer: SceneObserver, evaluator: EpisodeEvaluator, buf: StepBuffer,
                 data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = ""):
-    """The recorder's work after one control step: snapshot, evaluator update, buffer push (with
-    the operator stream's flags for the step and, when flagged, why)."""
-    state = observer.state(data)
-    record = evaluator.update(state, physics.CONTROL_DT)
-    if reasons:
-        buf.notes[buf.count] = reasons
-    buf.push(action=action, robot_qpos=data.qpos[scene.robot_qpos_adr],
-             robot_qvel=data.qvel[scene.robot_dof_adr],
-             object_pose=np.stack([np.concatenate([o.pos, o.quat]) for o in state.objects.values()]),
-             terminal=record.terminal, stage_latched=record.stage_latched, step_flags=flags)
+    """The recorder's work after one control step: snapshot, evaluator update, store (with the
+    operator stream's flags for the step and, when flagged, why). `b2d bench recorder` times the
+    same three calls one by one."""
+    record = evaluator.update(observer.state(data), physics.CONTROL_DT)
+    store_step(observer, buf, data, action, record, flags, reasons)
     return record
+
+
+def store_step(observer: SceneObserver, buf: StepBuffer, data: mujoco.MjData, action: np.ndarray,
+               record: StepRecord, flags: int = 0, reasons: str = "") -> None:
+    """Copy one step into the buffer's next rows straight from MjData: a fancy-index read per array
+    into its preallocated row, no per-object work."""
+    i = buf.next_row()
+    a = buf.arrays
+    a["action"][i] = action
+    data.qpos.take(observer.robot_qpos_idx, out=a["robot_qpos"][i])     # the method: np.take's wrapper
+    data.qvel.take(observer.robot_dof_idx, out=a["robot_qvel"][i])      # costs as much as the copy
+    observer.object_pose_into(data, a["object_pose"][i])
+    a["terminal"][i] = record.terminal
+    a["stage_latched"][i] = record.stage_latched
+    a["step_flags"][i] = flags
+    if reasons:
+        buf.notes[i] = reasons
 
 
 HORIZON_FACTOR = 1.5            # paper: the evaluation horizon is 1.5x the recorded expert horizon
@@ -119,7 +133,7 @@ class EpisodeRecording:
         return self.buf.count
 
     def step(self, data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = ""):
-        return record_step(self.scene, self.observer, self.evaluator, self.buf, data, action, flags, reasons)
+        return record_step(self.observer, self.evaluator, self.buf, data, action, flags, reasons)
 
     def finish(self, episode_id: str, seed: int, operator: str, termination: str | None = None,
                extra: dict | None = None) -> RawRecording:
