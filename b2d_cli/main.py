@@ -98,7 +98,10 @@ def list_cmd(kind: str, as_json: bool) -> None:
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
 @click.option("--first-index", default=0, show_default=True, help="Index of the first episode (sets its seed).")
 @click.option("--max-steps", default=None, type=int, help="Cap each episode's control steps.")
-def record(task, embodiment, episodes, out_dir, first_index, max_steps) -> None:
+@click.option("--operator", type=click.Choice(["stream", "scripted"]), default="stream", show_default=True,
+              help="stream: the script plays the person through the teleop stream (keypoints + wrist poses -> "
+                   "DexPilot + arm IK); scripted: the same plan commands the joints directly (baseline).")
+def record(task, embodiment, episodes, out_dir, first_index, max_steps, operator) -> None:
     """Record raw demonstrations with the scripted operator."""
     from teleop.demos import record_demonstrations
 
@@ -106,7 +109,7 @@ def record(task, embodiment, episodes, out_dir, first_index, max_steps) -> None:
     registry.validate_name("embodiment", embodiment)
     with click.progressbar(length=episodes, label=f"recording {task} on {embodiment}", file=sys.stderr) as bar:
         results = record_demonstrations(task, embodiment, episodes, out_dir, max_steps=max_steps,
-                                        first_index=first_index, progress=bar.update)
+                                        first_index=first_index, progress=bar.update, operator=operator)
     for r in results:
         status = "error: " + r.error if r.error else ("success" if r.success else "no success")
         click.echo(f"{r.episode_id}  steps={r.steps:<5} {status}  {r.path or ''}")
@@ -178,11 +181,13 @@ def validate(episode) -> None:
 @click.option("--episodes", default=4, show_default=True, type=click.IntRange(min=1),
               help="demos: demonstrations per setting.")
 @click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26).")
-def bench(part, profile, steps, workers, episodes, setting) -> None:
+@click.option("--operator", type=click.Choice(["stream", "scripted"]), default="stream", show_default=True,
+              help="demos: the scripted operator through the teleop stream, or its direct joint path.")
+def bench(part, profile, steps, workers, episodes, setting, operator) -> None:
     """Print benchmark figures as JSON on stdout."""
     if part == "demos":
         from teleop.demo_bench import run_demo_bench
-        figures = run_demo_bench(episodes=episodes, only=list(setting) or None)
+        figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator)
     elif part == "media":
         from episode_media.bench import run_media_bench
         figures = run_media_bench(profile=profile, steps=steps)

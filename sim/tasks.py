@@ -9,6 +9,7 @@ at load time. No task needs Python of its own. Masses, frictions and densities a
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -245,22 +246,57 @@ def _parse_points(path, raw) -> dict[str, list]:
     return points
 
 
-def _parse_plan(path, raw, objects) -> list[dict]:
+PLAN_STEP = "{hand, pick, place} or {hand, drag, to_zone}"
+PICK_KEYS = ("hand", "pick", "place", "place_offset", "grasp", "approach_pitch_deg")
+DRAG_KEYS = ("hand", "drag", "to_zone")
+PLAN_GRASPS = ("power", "pinch")
+APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _parse_plan(path, raw, objects, zones) -> list[dict]:
+    """The scripted operator's plan (teleop/scripted_operator.py): pick-and-place steps
+    {hand, pick, place, [place_offset], [grasp], [approach_pitch_deg]} and drag steps {hand, drag,
+    to_zone} that pull a container across the table into a zone. Every field is checked here, so a
+    bad plan fails when the task loads, naming the step."""
     plan = raw.get("demo_plan") or []
     if not isinstance(plan, list):
-        raise SpecError(path, "demo_plan", "a list of steps {hand, pick, place}", plan)
+        raise SpecError(path, "demo_plan", f"a list of steps {PLAN_STEP}", plan)
     for i, step in enumerate(plan):
+        where = f"demo_plan[{i}]"
         if not isinstance(step, dict):
-            raise SpecError(path, f"demo_plan[{i}]", "a mapping {hand, pick, place}", step)
-        for key in ("hand", "pick", "place"):
+            raise SpecError(path, where, f"a mapping {PLAN_STEP}", step)
+        allowed = DRAG_KEYS if "drag" in step else PICK_KEYS
+        for key in step:
+            if key not in allowed:
+                raise SpecError(path, f"{where}.{key}", f"one of the step's fields {list(allowed)}", step[key])
+        for key in (DRAG_KEYS if "drag" in step else PICK_KEYS[:3]):
             if key not in step:
-                raise SpecError(path, f"demo_plan[{i}].{key}", "a value")
+                raise SpecError(path, f"{where}.{key}", "a value")
         if step["hand"] not in ("left", "right"):
-            raise SpecError(path, f"demo_plan[{i}].hand", "'left' or 'right'", step["hand"])
-        for key in ("pick", "place"):
-            if step[key] not in objects:
-                raise SpecError(path, f"demo_plan[{i}].{key}", f"an object from {sorted(objects)}",
-                                step[key])
+            raise SpecError(path, f"{where}.hand", "'left' or 'right'", step["hand"])
+        for key in ("pick", "place", "drag"):
+            if key in step and step[key] not in objects:
+                raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}", step[key])
+        if "drag" in step:
+            if step["to_zone"] not in zones:
+                raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(zones)}", step["to_zone"])
+            if objects[step["drag"]].interior_half_extents is None:
+                containers = sorted(n for n, o in objects.items() if o.interior_half_extents is not None)
+                raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
+            continue
+        offset = step.get("place_offset", [0.0, 0.0])
+        if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
+            raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
+        if step.get("grasp", "power") not in PLAN_GRASPS:
+            raise SpecError(path, f"{where}.grasp", f"one of {list(PLAN_GRASPS)}", step["grasp"])
+        lo, hi = APPROACH_PITCH_RANGE_DEG
+        pitch = step.get("approach_pitch_deg", 0.0)
+        if not _is_number(pitch) or not lo <= pitch <= hi:
+            raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
     return plan
 
 
@@ -309,7 +345,7 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
         objects=objects,
         zones=zones,
         points=_parse_points(path, raw),
-        demo_plan=_parse_plan(path, raw, objects),
+        demo_plan=_parse_plan(path, raw, objects, zones),
         metrics=raw["metrics"],
         source=Path(path),
         raw=raw,

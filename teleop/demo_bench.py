@@ -1,4 +1,6 @@
-"""`b2d bench demos`: stable-success count of the scripted operator per paper setting.
+"""`b2d bench demos`: stable-success count of the scripted operator per paper setting, through the
+stream interface (default) or the direct joint path (``operator="scripted"``), with the time per
+recorded control step (operator + physics + recorder).
 
 Every one of the paper's 26 settings is listed; a setting whose task has no `demo_plan` yet is
 reported as such (0 successes) rather than left out, so the table shows how far the issue's goal
@@ -12,10 +14,10 @@ import time
 from pathlib import Path
 
 from sim.registry import paper_settings, parse_setting_key
-from teleop.demos import record_demonstrations
+from teleop.demos import DEFAULT_OPERATOR, record_demonstrations
 
 
-def run_demo_bench(episodes: int = 4, only: list[str] | None = None) -> dict:
+def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: str = DEFAULT_OPERATOR) -> dict:
     for key in only or ():
         parse_setting_key(key)      # an unknown task or embodiment fails here, naming the valid ones
     rows, succeeded = [], 0
@@ -28,13 +30,16 @@ def run_demo_bench(episodes: int = 4, only: list[str] | None = None) -> dict:
             continue
         t0 = time.perf_counter()
         with tempfile.TemporaryDirectory() as tmp:
-            results = record_demonstrations(setting.task, setting.embodiment, episodes, Path(tmp))
+            results = record_demonstrations(setting.task, setting.embodiment, episodes, Path(tmp), operator=operator)
+        seconds = time.perf_counter() - t0
+        steps = sum(r.steps for r in results)
         wins = sum(r.success for r in results)
         errors = [r.error for r in results if r.error]
         succeeded += wins > episodes / 2
-        rows.append({**row, "successes": wins, "mean_steps": round(sum(r.steps for r in results) / episodes, 1),
-                     "seconds": round(time.perf_counter() - t0, 2),
+        rows.append({**row, "successes": wins, "mean_steps": round(steps / episodes, 1),
+                     "seconds": round(seconds, 2), "ms_per_step": round(1e3 * seconds / max(steps, 1), 2),
                      "status": f"{len(errors)} errors: {errors[0]}" if errors else "ok"})
     return {"settings": rows, "settings_with_majority_success": succeeded, "settings_listed": len(rows),
-            "note": "scripted operator, demonstration seeds 0..episodes-1 of each setting; success = the "
+            "operator": operator,
+            "note": f"scripted operator ({operator}), demonstration seeds 0..episodes-1 of each setting; success = the "
                     "evaluator's stable success (reach-and-stop)"}

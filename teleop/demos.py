@@ -1,5 +1,9 @@
 """Record demonstrations for a setting: one raw recording per episode, each in its own scene
-sample; a failing episode is logged and skipped, never stopping the others."""
+sample; a failing episode is logged and skipped, never stopping the others.
+
+Operators: ``stream`` (default) plays the person through the live session's stream interface
+(keypoints and wrist poses -> sanitizer -> DexPilot + arm IK; ``teleop/scripted_stream.py``);
+``scripted`` commands the same plan's joints directly, the baseline it is measured against."""
 
 from __future__ import annotations
 
@@ -15,8 +19,11 @@ from sim.scene.sample import demonstration_sample, task_seed
 from sim.tasks import load_task
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
+from teleop.scripted_stream import ScriptedStreamOperator
 
 log = logging.getLogger(__name__)
+OPERATORS = {"stream": ScriptedStreamOperator, "scripted": ScriptedOperator}
+DEFAULT_OPERATOR = "stream"
 
 
 @dataclass
@@ -33,7 +40,10 @@ def raw_filename(episode_id: str) -> str:
 
 
 def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Path,
-                          max_steps: int | None = None, first_index: int = 0, progress=None) -> list[RecordedEpisode]:
+                          max_steps: int | None = None, first_index: int = 0, progress=None,
+                          operator: str = DEFAULT_OPERATOR) -> list[RecordedEpisode]:
+    if operator not in OPERATORS:
+        raise ValueError(f"operator: expected one of {list(OPERATORS)}, got {operator!r}")
     validate_name("task", task)
     validate_name("embodiment", embodiment)
     spec = load_task(task)
@@ -47,7 +57,7 @@ def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Pa
         seed = task_seed(task_index, i)
         try:
             scene = build_scene(spec, embodiment, demonstration_sample(spec, seed))
-            rec = record_episode(scene, ScriptedOperator(), episode_id, seed, max_steps=max_steps)
+            rec = record_episode(scene, OPERATORS[operator](), episode_id, seed, max_steps=max_steps)
             path = write_raw(Path(out_dir) / raw_filename(episode_id), rec)
             results.append(RecordedEpisode(episode_id, path, rec.success, rec.num_steps))
         except Exception as exc:   # one bad episode never stops the others

@@ -71,14 +71,13 @@ def test_negative_rolling_friction_is_refused(tmp_path):
 def test_bad_place_offset_names_file_and_field(tmp_path, bad):
     raw = yaml.safe_load(load_task("citrus_plate_loading").source.read_text())
     raw["demo_plan"][1]["place_offset"] = bad
-    task = parse_task(raw, tmp_path / "citrus.yaml")
     with pytest.raises(SpecError, match=r"citrus.yaml: field 'demo_plan\[1\].place_offset'"):
-        place_offset(task, 1)
+        parse_task(raw, tmp_path / "citrus.yaml")
 
 
 def test_place_offset_dz_defaults_to_the_targets_top():
     task = load_task("citrus_plate_loading")
-    assert place_offset(task, 0).tolist() == [0.065, -0.055, 0.0]
+    assert place_offset(task.demo_plan[0]).tolist() == [0.065, -0.055, 0.0]
 
 
 def _operator_with_lemon_at(offset_from_hand):

@@ -1,6 +1,6 @@
 """Guards for the scripted demonstrations: each paper setting whose task has a `demo_plan` reaches
-stable success on one demonstration seed that succeeded when its plan landed (`b2d bench demos`
-measures the success count over many seeds)."""
+stable success on one demonstration seed that succeeded when its plan landed, with the operator
+the pipeline records with (`b2d bench demos` measures the success count over many seeds)."""
 
 import pytest
 
@@ -8,14 +8,16 @@ from sim.registry import names
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, task_seed
 from sim.tasks import load_task
+from teleop.demos import DEFAULT_OPERATOR, OPERATORS
 from teleop.recorder import record_episode
-from teleop.scripted_operator import ScriptedOperator
 
 # (task, paper embodiment, demonstration episode index that succeeds). citrus_plate_loading is
 # guarded by tests/test_scripted_operator.py.
 SETTINGS = [
+    ("ball_box_loading", "ur5_wuji", 0),
     ("canned_food_tray_arrangement", "iiwa7_sharpa", 0),
     ("condiment_box_loading", "ur5_wuji", 0),
+    ("fruit_bowl_loading", "ur5_rh56dfx", 0),
 ]
 GUARDED_ELSEWHERE = {"citrus_plate_loading"}
 
@@ -26,7 +28,7 @@ def test_setting_demo_reaches_stable_success(task, embodiment, episode):
     assert spec.paper_embodiment == embodiment
     seed = task_seed(names("tasks").index(task), episode)
     scene = build_scene(spec, embodiment, demonstration_sample(spec, seed))
-    rec = record_episode(scene, ScriptedOperator(), f"{episode:04d}", seed)
+    rec = record_episode(scene, OPERATORS[DEFAULT_OPERATOR](), f"{episode:04d}", seed)
     record = rec.extra["episode_record"]
     assert rec.success, f"final stages {record['stage_final']}, drop {record['drop']}"
     assert record["termination"] == "stable_success"

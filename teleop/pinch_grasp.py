@@ -1,0 +1,150 @@
+"""A precision (pinch) grasp for small objects, found from the hand's own kinematics.
+
+A person picks a golf ball or a pill bottle off a table between the thumb and the first one or two
+fingers, the other fingers folded out of the way. For any hand, the same grasp comes out of its
+description: over the hand's actuated joints (couplings followed, as in simulation), the thumb pad
+is brought onto the pinching fingers' pads (the `retarget:` block's fingertip points) by a bounded
+Gauss-Newton solve, the other fingers are folded towards their closed end, and the point where the
+pads meet, expressed in the wrist-site frame, is where the object's centre goes.
+
+Closing towards a configuration where the pads meet leaves the servos pressing the object between
+them once they stop on it. No per-hand numbers: a new hand file gets a pinch for free.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.embodiment.description import DescriptionError, load_hand
+from teleop.retarget.hand_model import HandKinematics
+
+# Finger sets in order of preference: a tripod is steadier on a ball than thumb and index alone,
+# but not every thumb reaches two fingers at once; the first set whose pads meet is used.
+FINGER_SETS = (("index", "middle"), ("index",), ("middle",))
+MEET_M = 0.005                           # pads "meet" when their points are this close
+FOLD_FRACTION = 0.9                      # the other fingers: this far towards their closed end
+SOLVE_ITERS = 60
+RANDOM_STARTS = 400
+BEST_STARTS = 4
+DAMPING = 1e-4
+
+
+@dataclass(frozen=True)
+class PinchGrasp:
+    centre: np.ndarray          # object centre in the wrist-site frame (right hand)
+    close: np.ndarray           # actuator targets, hand actuator order, pads meeting
+    gap_m: float                # largest remaining distance between the thumb pad and a pinching pad
+    fingers: tuple[str, ...]    # the fingers the thumb pinches against
+
+
+def _fingertip_rows(kin: HandKinematics, fingers: tuple[str, ...]) -> tuple[int, list[int]]:
+    """Rows of ``kin.points`` (row 0 is the wrist point) of the thumb and of ``fingers``, found by the
+    MediaPipe keypoint each retarget point follows (the spec guarantees those, not finger names)."""
+    keypoints = [t.keypoint for t in kin.spec.fingertips]
+    rows = {}
+    for finger in ("thumb", *fingers):
+        keypoint = f"{'pinky' if finger == 'little' else finger}_tip"
+        if keypoint not in keypoints:
+            raise DescriptionError(f"{kin.hand.path}: field 'retarget.fingertips': a pinch needs a point that "
+                                   f"follows {keypoint!r}; the hand has {keypoints}")
+        rows[finger] = 1 + keypoints.index(keypoint)
+    return rows["thumb"], [rows[f] for f in fingers]
+
+
+@functools.lru_cache(maxsize=None)
+def pinch_grasp(hand_name: str) -> PinchGrasp:
+    """The first finger set whose pads meet the thumb's, else the set that comes closest."""
+    options = [solve_pinch(hand_name, fingers) for fingers in FINGER_SETS]
+    meeting = [g for g in options if g.gap_m <= MEET_M]
+    grasp = meeting[0] if meeting else min(options, key=lambda g: g.gap_m)
+    grasp.close.flags.writeable = grasp.centre.flags.writeable = False     # cached: shared by every caller
+    return grasp
+
+
+def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
+    """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
+    sample (one start gets caught in local minima on the hands with little thumb opposition)."""
+    kin = _kinematics(hand_name)
+    hand = load_hand(hand_name)
+    thumb, tips = _fingertip_rows(kin, fingers)
+    # actuators that move a pinching pad or the thumb pad solve; the rest fold away
+    moving = np.zeros(kin.dof, bool)
+    for q in (kin.home, kin.mid):     # a coupling resting on its limit hides a joint at one of them
+        _, J = kin.points_and_jacobians(q)
+        for row in [thumb, *tips]:
+            moving |= np.abs(J[row]).sum(axis=0) > 1e-9
+    far = np.where(np.abs(kin.upper - kin.home) >= np.abs(kin.lower - kin.home), kin.upper, kin.lower)
+    folded = kin.home + FOLD_FRACTION * (far - kin.home)
+
+    def gap(q):
+        P = kin.points(q)
+        return max(np.linalg.norm(P[thumb] - P[t]) for t in tips)
+
+    samples = np.random.default_rng(0).uniform(kin.lower, kin.upper, size=(RANDOM_STARTS, kin.dof))
+    starts = [kin.mid] + sorted(samples, key=gap)[:BEST_STARTS]
+    best = None
+    for start in starts:
+        q = np.where(moving, start, folded)
+        damping = DAMPING
+        for _ in range(SOLVE_ITERS):       # Levenberg-Marquardt: the pads need not meet, so steps can overshoot
+            P, J = kin.points_and_jacobians(q)
+            r = np.concatenate([P[thumb] - P[t] for t in tips])
+            A = np.concatenate([J[thumb] - J[t] for t in tips])[:, moving]
+            step = np.linalg.solve(A.T @ A + damping * np.eye(A.shape[1]), -A.T @ r)
+            trial = q.copy()
+            trial[moving] = np.clip(q[moving] + step, kin.lower[moving], kin.upper[moving])
+            if gap(trial) < gap(q):
+                q, damping = trial, max(damping / 3, DAMPING)
+            else:
+                damping = min(damping * 10, 1e6)
+        if best is None or gap(q) < gap(best):
+            best = q.copy()
+        if gap(best) <= MEET_M:     # the first start that meets: mid-range first, the most natural pinch
+            break
+    P = kin.points(best)
+    meet = P[[thumb, *tips]].mean(axis=0)
+    site = hand.wrist_site
+    return PinchGrasp(centre=site.rot.T @ (meet - site.pos), close=best, gap_m=float(gap(best)), fingers=fingers)
+
+
+@functools.lru_cache(maxsize=None)
+def _kinematics(hand_name: str) -> HandKinematics:
+    return HandKinematics(hand_name)
+
+
+def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The pre-shape to come down with: actuator targets on the way from ``open_`` to ``close``, as
+    closed as possible while the thumb pad stays ``width_m`` from every pinching pad, and the point
+    midway between the thumb pad and the pinching pads there (wrist-site frame, right hand), where
+    the object's centre goes so that both sides close in on it together."""
+    kin, site = _kinematics(hand_name), load_hand(hand_name).wrist_site
+    thumb, tips = _fingertip_rows(kin, pinch_grasp(hand_name).fingers)
+    for s in np.linspace(1.0, 0.0, 21):      # ends at s = 0, the open hand, if nothing is wide enough
+        q = open_ + s * (close - open_)
+        P = kin.points(q)
+        if min(np.linalg.norm(P[thumb] - P[t]) for t in tips) >= width_m:
+            break
+    P = kin.points(q)
+    middle = 0.5 * (P[thumb] + P[tips].mean(axis=0))
+    return q, site.rot.T @ (middle - site.pos)
+
+
+def fingertips_in_site_frame(hand_name: str, q: np.ndarray) -> np.ndarray:
+    """(fingers, 3) fingertip pad points of the right hand at actuator targets ``q``, in the
+    wrist-site frame (x lateral, y palm normal, z along the fingers)."""
+    kin, site = _kinematics(hand_name), load_hand(hand_name).wrist_site
+    return (kin.points(q)[1:] - site.pos) @ site.rot
+
+
+def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
+    """Unit vector from the thumb pad to the pinching pads (right hand, wrist-site frame), with the
+    hand half closed: the direction across which a pinched object must fit."""
+    grasp = pinch_grasp(hand_name)
+    kin = _kinematics(hand_name)
+    thumb, tips = _fingertip_rows(kin, grasp.fingers)
+    P = fingertips_in_site_frame(hand_name, 0.5 * (kin.home + grasp.close))
+    axis = P[[t - 1 for t in tips]].mean(axis=0) - P[thumb - 1]    # rows of P: fingertips only
+    return axis / np.linalg.norm(axis)

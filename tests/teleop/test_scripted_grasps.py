@@ -1,0 +1,90 @@
+"""The pinch grasp found from each hand's kinematics, and the scripted operator's pinch and drag steps."""
+
+import numpy as np
+import pytest
+import yaml
+
+from sim.errors import SpecError
+from sim.registry import names
+from sim.scene.builder import demonstration_scene
+from sim.tasks import load_task, parse_task
+from teleop.pinch_grasp import _fingertip_rows, _kinematics, pinch_grasp, pinch_preshape
+from teleop.recorder import record_episode
+from teleop.scripted_operator import ScriptedOperator
+
+
+def _closest_sampled_gap(hand: str, fingers, samples: int = 4000) -> float:
+    """The closest thumb-to-finger pad distance over random actuator targets (seeded)."""
+    kin = _kinematics(hand)
+    thumb, tips = _fingertip_rows(kin, fingers)
+    rng = np.random.default_rng(12345)      # not the solver's own seed: these are other samples
+    best = np.inf
+    for q in rng.uniform(kin.lower, kin.upper, size=(samples, kin.dof)):
+        P = kin.points(q)
+        best = min(best, max(np.linalg.norm(P[thumb] - P[t]) for t in tips))
+    return best
+
+
+@pytest.mark.parametrize("hand", names("hands"))
+def test_solved_pinch_is_at_least_as_close_as_random_search(hand):
+    grasp = pinch_grasp(hand)
+    assert grasp.close.shape == (_kinematics(hand).dof,)
+    assert grasp.gap_m <= _closest_sampled_gap(hand, grasp.fingers) + 1e-3
+
+
+@pytest.mark.parametrize("hand", names("hands"))
+def test_every_hand_brings_the_pads_together(hand):
+    assert pinch_grasp(hand).gap_m <= 0.005
+
+
+def test_preshape_spreads_the_pads_and_centres_the_object_between_them():
+    hand = "wuji"
+    kin, grasp = _kinematics(hand), pinch_grasp(hand)
+    q, centre = pinch_preshape(hand, kin.home, grasp.close, 0.06)
+    thumb, tips = _fingertip_rows(kin, grasp.fingers)
+    P = kin.points(q)
+    assert min(np.linalg.norm(P[thumb] - P[t]) for t in tips) >= 0.06
+    # nearer the pinch than a wider pre-shape
+    q_wide, _ = pinch_preshape(hand, kin.home, grasp.close, 0.09)
+    assert np.linalg.norm(q - grasp.close) < np.linalg.norm(q_wide - grasp.close)
+    assert np.all(np.isfinite(centre))
+
+
+def test_golf_ball_is_pinched_and_lifted():
+    """ball_box_loading on UR5+Wuji: the right hand's first pick is a pinch of the golf ball."""
+    scene = demonstration_scene("ball_box_loading", "ur5_wuji", 0)
+    rec = record_episode(scene, ScriptedOperator(), "pinch", 0, max_steps=300)
+    golf = rec.object_names.index("golf_ball")
+    z = rec.object_pose[:, golf, 2]
+    assert z.max() - z[0] > 0.08, f"golf ball only rose {1000 * (z.max() - z[0]):.0f} mm"
+
+
+@pytest.mark.parametrize("field, bad", [("grasp", "claw"), ("approach_pitch_deg", 95), ("approach_pitch_deg", "steep"),
+                                        ("approach_pitch_deg", True), ("grsp", "pinch"), ("to_zone", "center")])
+def test_bad_plan_fields_fail_when_the_task_loads_naming_file_and_field(tmp_path, field, bad):
+    """Misspelt or inapplicable fields too: a plan is checked when its task loads, not per episode."""
+    raw = yaml.safe_load(load_task("ball_box_loading").source.read_text())
+    raw["demo_plan"][1][field] = bad
+    with pytest.raises(SpecError, match=rf"balls.yaml: field 'demo_plan\[1\].{field}'"):
+        parse_task(raw, tmp_path / "balls.yaml")
+
+
+def test_drag_pulls_the_bowl_into_the_centre_zone():
+    """fruit_bowl_loading on UR5+RH56DFX: the plan's first step hooks the fingers inside the bowl's
+    near wall and drags it into the centre zone (|x|, |y| <= 0.1 m) without tipping it."""
+    scene = demonstration_scene("fruit_bowl_loading", "ur5_rh56dfx", 0)
+    rec = record_episode(scene, ScriptedOperator(), "drag", 0, max_steps=340)
+    bowl = rec.object_names.index("bowl")
+    start, end = rec.object_pose[0, bowl], rec.object_pose[-1, bowl]
+    assert np.linalg.norm(start[:2]) > 0.3 and np.all(np.abs(end[:2]) <= 0.1), f"bowl went {start[:2]} -> {end[:2]}"
+    assert abs(end[2] - start[2]) < 0.01, "bowl not resting upright on the table after the drag"
+
+
+@pytest.mark.parametrize("step, field, expected", [({"hand": "right", "drag": "apple_1", "to_zone": "center"}, "drag", "a container"),
+                                                   ({"hand": "right", "drag": "bowl", "to_zone": "shelf"}, "to_zone", "a zone"),
+                                                   ({"hand": "right", "drag": "bowl"}, "to_zone", "a value")])
+def test_bad_drag_steps_name_file_and_field(tmp_path, step, field, expected):
+    raw = yaml.safe_load(load_task("fruit_bowl_loading").source.read_text())
+    raw["demo_plan"][0] = step
+    with pytest.raises(SpecError, match=rf"bowl.yaml: field 'demo_plan\[0\].{field}'.*{expected}"):
+        parse_task(raw, tmp_path / "bowl.yaml")
