@@ -247,8 +247,8 @@ def _parse_points(path, raw) -> dict[str, list]:
 
 
 PLAN_STEP = "{hand, pick, place} or {hand, drag, to_zone}"
-PICK_KEYS = ("hand", "pick", "place", "place_offset", "grasp", "approach_pitch_deg")
-DRAG_KEYS = ("hand", "drag", "to_zone")
+PICK_KEYS = ("hand", "pick", "place", "place_offset", "grasp", "approach_pitch_deg", "after")
+DRAG_KEYS = ("hand", "drag", "to_zone", "after")
 PLAN_GRASPS = ("power", "pinch")
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 
@@ -259,9 +259,10 @@ def _is_number(value) -> bool:
 
 def _parse_plan(path, raw, objects, zones) -> list[dict]:
     """The scripted operator's plan (teleop/scripted_operator.py): pick-and-place steps
-    {hand, pick, place, [place_offset], [grasp], [approach_pitch_deg]} and drag steps {hand, drag,
-    to_zone} that pull a container across the table into a zone. Every field is checked here, so a
-    bad plan fails when the task loads, naming the step."""
+    {hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [after]} and drag steps {hand,
+    drag, to_zone, [after]} that pull a container across the table into a zone; `after` lists earlier
+    steps (by index) that must end before this one starts (the hands otherwise work at once). Every
+    field is checked here, so a bad plan fails when the task loads, naming the step."""
     plan = raw.get("demo_plan") or []
     if not isinstance(plan, list):
         raise SpecError(path, "demo_plan", f"a list of steps {PLAN_STEP}", plan)
@@ -273,11 +274,15 @@ def _parse_plan(path, raw, objects, zones) -> list[dict]:
         for key in step:
             if key not in allowed:
                 raise SpecError(path, f"{where}.{key}", f"one of the step's fields {list(allowed)}", step[key])
-        for key in (DRAG_KEYS if "drag" in step else PICK_KEYS[:3]):
+        for key in (DRAG_KEYS if "drag" in step else PICK_KEYS)[:3]:     # the required ones
             if key not in step:
                 raise SpecError(path, f"{where}.{key}", "a value")
         if step["hand"] not in ("left", "right"):
             raise SpecError(path, f"{where}.hand", "'left' or 'right'", step["hand"])
+        after = step.get("after", [])
+        if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < i
+                                                  for j in after):
+            raise SpecError(path, f"{where}.after", f"a list of earlier step indices (0..{i - 1})", after)
         for key in ("pick", "place", "drag"):
             if key in step and step[key] not in objects:
                 raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}", step[key])

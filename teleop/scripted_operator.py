@@ -199,11 +199,17 @@ class ScriptedOperator:
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
                                 "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, open_, start),
                                 "home": (pos0, quat0)}
+        ends: list[int] = []         # each step's last control step
         for item in scene.task.demo_plan:
+            tl = self.sides[item["hand"]]["timeline"]
+            wait_until = max((ends[j] for j in item.get("after", [])), default=0)
+            if wait_until > tl.end:
+                tl.add(wait_until - tl.end)     # the hand holds still until those steps are done
             if "drag" in item:
                 self._plan_drag(data, item)
             else:
                 self._plan_pick_place(data, item, place_offset(item))
+            ends.append(tl.end)
         for side in self.sides.values():
             side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], hand=side["open"])
         self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS

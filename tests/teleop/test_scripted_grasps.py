@@ -1,5 +1,7 @@
 """The pinch grasp found from each hand's kinematics, and the scripted operator's pinch and drag steps."""
 
+import copy
+
 import numpy as np
 import pytest
 import yaml
@@ -87,4 +89,34 @@ def test_bad_drag_steps_name_file_and_field(tmp_path, step, field, expected):
     raw = yaml.safe_load(load_task("fruit_bowl_loading").source.read_text())
     raw["demo_plan"][0] = step
     with pytest.raises(SpecError, match=rf"bowl.yaml: field 'demo_plan\[0\].{field}'.*{expected}"):
+        parse_task(raw, tmp_path / "bowl.yaml")
+
+
+def test_a_step_after_another_waits_for_it(tmp_path):
+    """`after: [0]` on the left hand's first pick holds the left hand until the right hand's drag ends."""
+    from sim.scene.builder import build_scene
+    from sim.scene.sample import demonstration_sample
+
+    raw = yaml.safe_load(load_task("fruit_bowl_loading").source.read_text())
+    plain = parse_task(copy.deepcopy(raw), tmp_path / "bowl.yaml")
+    raw["demo_plan"][1]["after"] = [0]
+    waiting = parse_task(raw, tmp_path / "bowl.yaml")
+    starts = {}
+    for name, task in (("plain", plain), ("waiting", waiting)):
+        scene = build_scene(task, "ur5_rh56dfx", demonstration_sample(task, 0))
+        op = ScriptedOperator()
+        op.reset(scene, scene.home_data())
+        right, left = op.sides["right"]["timeline"], op.sides["left"]["timeline"]
+        drag_end = right.frames[6].end_step          # start, then approach, descend, hook, pull, release, retreat
+        sets_off = [a.end_step for a, f in zip(left.frames, left.frames[1:]) if not np.allclose(a.pos, f.pos)]
+        starts[name] = (drag_end, sets_off[0])
+    assert starts["plain"][1] < starts["plain"][0]          # without it the left hand sets off during the drag
+    assert starts["waiting"][1] == starts["waiting"][0]
+
+
+@pytest.mark.parametrize("after", [[1], [-1], "0", [True]])
+def test_after_must_name_earlier_steps(tmp_path, after):
+    raw = yaml.safe_load(load_task("fruit_bowl_loading").source.read_text())
+    raw["demo_plan"][1]["after"] = after
+    with pytest.raises(SpecError, match=r"bowl.yaml: field 'demo_plan\[1\].after'"):
         parse_task(raw, tmp_path / "bowl.yaml")
