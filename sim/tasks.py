@@ -250,6 +250,7 @@ PLAN_STEP = "{hand, pick, place} or {hand, drag, to_zone}"
 PICK_KEYS = ("hand", "pick", "place", "place_offset", "grasp", "approach_pitch_deg", "after")
 DRAG_KEYS = ("hand", "drag", "to_zone", "after")
 PLAN_GRASPS = ("power", "pinch")
+TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 
 
@@ -259,7 +260,8 @@ def _is_number(value) -> bool:
 
 def _parse_plan(path, raw, objects, zones) -> list[dict]:
     """The scripted operator's plan (teleop/scripted_operator.py): pick-and-place steps
-    {hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [after]} and drag steps {hand,
+    {hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [after]} (place: an object, or
+    `table` with place_offset the spot on the table to set the object down at) and drag steps {hand,
     drag, to_zone, [after]} that pull a container across the table into a zone; `after` lists earlier
     steps (by index) that must end before this one starts (the hands otherwise work at once). Every
     field is checked here, so a bad plan fails when the task loads, naming the step."""
@@ -284,8 +286,9 @@ def _parse_plan(path, raw, objects, zones) -> list[dict]:
                                                   for j in after):
             raise SpecError(path, f"{where}.after", f"a list of earlier step indices (0..{i - 1})", after)
         for key in ("pick", "place", "drag"):
-            if key in step and step[key] not in objects:
-                raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}", step[key])
+            if key in step and step[key] not in objects and not (key == "place" and step[key] == TABLE_TARGET):
+                also = f" or {TABLE_TARGET!r}" if key == "place" else ""
+                raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}{also}", step[key])
         if "drag" in step:
             if step["to_zone"] not in zones:
                 raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(zones)}", step["to_zone"])

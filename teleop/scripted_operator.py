@@ -31,7 +31,7 @@ from sim.embodiment.mirror import M, mirror_vec
 from sim.errors import SpecError
 from sim.scene.builder import Scene
 from sim.scene.sample import zone_centre
-from sim.tasks import TaskSpec
+from sim.tasks import TABLE_TARGET, TaskSpec
 from teleop.pinch_grasp import fingertips_in_site_frame, pinch_axis_in_site_frame, pinch_grasp, pinch_preshape
 
 # Palm down, fingers pointing away from the robot (+y world): hand axes (x, y=palm normal, z=fingers).
@@ -77,7 +77,7 @@ def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
 def place_offset(item: dict) -> np.ndarray:
     """A plan step's `place_offset` (checked when the task loads): [dx, dy] from the target's centre,
     optionally dz from its top (negative: lowered into a container and let go just above its floor
-    rather than its rim)."""
+    rather than its rim); for `place: table`, the [x, y] of the table top to set the object down at."""
     return np.array([*item.get("place_offset", [0.0, 0.0]), 0.0][:3], float)
 
 
@@ -246,10 +246,14 @@ class ScriptedOperator:
             closing = [(DURATIONS["close"], self._power(side, WALL)), (DURATIONS["close_late"], self._power(side, CLOSED))]
             ready = open_
         grasp = self._object_pos(data, item["pick"]) - offset
-        target = task.objects[item["place"]]
-        place_xy = self._object_pos(data, item["place"])[:2] + offset_xyz[:2]
-        place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + offset_xyz[2]
-                   + half_z + RELEASE_GAP_M)
+        if item["place"] == TABLE_TARGET:       # set down at a spot of the table top
+            place_xy = offset_xyz[:2]
+            place_z = self.scene.table_height + offset_xyz[2] + obj.rest_height + RELEASE_GAP_M
+        else:
+            target = task.objects[item["place"]]
+            place_xy = self._object_pos(data, item["place"])[:2] + offset_xyz[:2]
+            place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + offset_xyz[2]
+                       + half_z + RELEASE_GAP_M)
         place = np.array([*place_xy, place_z]) - offset
         up = np.array([0, 0, 1.0])
         reach = len(tl.frames)
@@ -270,7 +274,8 @@ class ScriptedOperator:
         tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
         carried_at = tl.frames[first - 1].end_step
         side["corrections"].append((carried_at, item["pick"], offset, slice(first, len(tl.frames))))
-        self._look_again(side, item["place"], data, carry, len(tl.frames))
+        if item["place"] != TABLE_TARGET:
+            self._look_again(side, item["place"], data, carry, len(tl.frames))
 
     def _plan_drag(self, data, item: dict) -> None:
         """Drag a container across the table into the zone, the way a person pulls a box or a bowl

@@ -120,3 +120,27 @@ def test_after_must_name_earlier_steps(tmp_path, after):
     raw["demo_plan"][1]["after"] = after
     with pytest.raises(SpecError, match=r"bowl.yaml: field 'demo_plan\[1\].after'"):
         parse_task(raw, tmp_path / "bowl.yaml")
+
+
+def test_place_table_sets_the_object_down_at_a_spot_of_the_table(tmp_path):
+    """breadbasket_fast_food_loading's second step: the left hand sets the hamburger down at
+    (-0.25, -0.18), out of the basket's way, and it stays there on the table."""
+    from sim.scene.builder import build_scene
+    from sim.scene.sample import demonstration_sample
+
+    task = load_task("breadbasket_fast_food_loading")
+    step = task.demo_plan[1]
+    assert step["place"] == "table" and step["pick"] == "hamburger"
+    scene = build_scene(task, "ur5_rh5dg2", demonstration_sample(task, 0))
+    rec = record_episode(scene, ScriptedOperator(), "table", 0, max_steps=700)
+    burger = rec.object_names.index("hamburger")
+    end = rec.object_pose[-1, burger]
+    assert np.linalg.norm(end[:2] - np.array(step["place_offset"])) < 0.03, f"hamburger at {end[:2]}"
+    assert abs(end[2] - rec.object_pose[0, burger, 2]) < 0.01      # resting on the table again
+
+
+def test_a_misspelt_place_lists_the_objects_and_the_table(tmp_path):
+    raw = yaml.safe_load(load_task("breadbasket_fast_food_loading").source.read_text())
+    raw["demo_plan"][1]["place"] = "tabel"
+    with pytest.raises(SpecError, match=r"demo_plan\[1\].place'.*or 'table'"):
+        parse_task(raw, tmp_path / "bread.yaml")
