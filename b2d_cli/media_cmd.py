@@ -6,7 +6,14 @@ from pathlib import Path
 
 import click
 
-FRAMES_HELP = "Frames A:B (A to B-1, 0-based; either end may be left out) [default: all]."
+
+def frame_selection(command):
+    """The episode argument and the --frames / --stride options both media commands take."""
+    command = click.option("--stride", default=1, show_default=True, type=click.IntRange(min=1),
+                           help="Keep every K-th frame.")(command)
+    command = click.option("--frames", default=None,
+                           help="Frames A:B (A to B-1, 0-based; either end may be left out) [default: all].")(command)
+    return click.argument("episode", type=click.Path(path_type=Path))(command)
 
 
 @click.group()
@@ -15,11 +22,9 @@ def export() -> None:
 
 
 @export.command()
-@click.argument("episode", type=click.Path(path_type=Path))
+@frame_selection
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), default=None,
               help="Folder to write (frames/<episode>.usdc + assets/) [default: ./<episode>_usd].")
-@click.option("--frames", default=None, help=FRAMES_HELP)
-@click.option("--stride", default=1, show_default=True, type=click.IntRange(min=1), help="Keep every K-th frame.")
 @click.option("--format", "file_format", type=click.Choice(["usdc", "usda"]), default="usdc", show_default=True)
 def usd(episode: Path, out: Path | None, frames: str | None, stride: int, file_format: str) -> None:
     """Write the episode's motion as an animated USD stage (MuJoCo's USD exporter)."""
@@ -32,11 +37,9 @@ def usd(episode: Path, out: Path | None, frames: str | None, stride: int, file_f
 
 
 @click.command()
-@click.argument("episode", type=click.Path(path_type=Path))
+@frame_selection
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="An .mp4 video or a .png strip (frames top to bottom) [default: ./<episode>.mp4].")
-@click.option("--frames", default=None, help=FRAMES_HELP)
-@click.option("--stride", default=1, show_default=True, type=click.IntRange(min=1), help="Keep every K-th frame.")
 @click.option("--camera-scale", default=1, show_default=True, type=click.IntRange(min=1),
               help="Enlarge camera tiles by this whole factor (1 shows the stored pixels).")
 def show(episode: Path, out: Path | None, frames: str | None, stride: int, camera_scale: int) -> None:

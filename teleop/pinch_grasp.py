@@ -4,8 +4,8 @@ A person picks a golf ball or a pill bottle off a table between the thumb and th
 fingers, the other fingers folded out of the way. For any hand, the same grasp comes out of its
 description: over the hand's actuated joints (couplings followed, as in simulation), the thumb pad
 is brought onto the pinching fingers' pads (the `retarget:` block's fingertip points) by a bounded
-Gauss-Newton solve, the other fingers are folded towards their closed end, and the point where the
-pads meet, expressed in the wrist-site frame, is where the object's centre goes.
+Levenberg-Marquardt solve, the other fingers are folded towards their closed end, and the point where
+the pads meet, expressed in the wrist-site frame, is where the object's centre goes.
 
 Closing towards a configuration where the pads meet leaves the servos pressing the object between
 them once they stop on it. No per-hand numbers: a new hand file gets a pinch for free.
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sim.embodiment.description import DescriptionError, load_hand
+from sim.embodiment.description import DescriptionError
 from teleop.retarget.hand_model import HandKinematics
 
 # Finger sets in order of preference: a tripod is steadier on a ball than thumb and index alone,
@@ -68,7 +68,6 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
     """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
     sample (one start gets caught in local minima on the hands with little thumb opposition)."""
     kin = _kinematics(hand_name)
-    hand = load_hand(hand_name)
     thumb, tips = _fingertip_rows(kin, fingers)
     # actuators that move a pinching pad or the thumb pad solve; the rest fold away
     moving = np.zeros(kin.dof, bool)
@@ -85,10 +84,10 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
 
     samples = np.random.default_rng(0).uniform(kin.lower, kin.upper, size=(RANDOM_STARTS, kin.dof))
     starts = [kin.mid] + sorted(samples, key=gap)[:BEST_STARTS]
-    best = None
+    best, best_gap = None, np.inf
     for start in starts:
         q = np.where(moving, start, folded)
-        damping = DAMPING
+        q_gap, damping = gap(q), DAMPING
         for _ in range(SOLVE_ITERS):       # Levenberg-Marquardt: the pads need not meet, so steps can overshoot
             P, J = kin.points_and_jacobians(q)
             r = np.concatenate([P[thumb] - P[t] for t in tips])
@@ -96,18 +95,17 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
             step = np.linalg.solve(A.T @ A + damping * np.eye(A.shape[1]), -A.T @ r)
             trial = q.copy()
             trial[moving] = np.clip(q[moving] + step, kin.lower[moving], kin.upper[moving])
-            if gap(trial) < gap(q):
-                q, damping = trial, max(damping / 3, DAMPING)
+            trial_gap = gap(trial)
+            if trial_gap < q_gap:
+                q, q_gap, damping = trial, trial_gap, max(damping / 3, DAMPING)
             else:
                 damping = min(damping * 10, 1e6)
-        if best is None or gap(q) < gap(best):
-            best = q.copy()
-        if gap(best) <= MEET_M:     # the first start that meets: mid-range first, the most natural pinch
+        if q_gap < best_gap:
+            best, best_gap = q.copy(), q_gap
+        if best_gap <= MEET_M:     # the first start that meets: mid-range first, the most natural pinch
             break
-    P = kin.points(best)
-    meet = P[[thumb, *tips]].mean(axis=0)
-    site = hand.wrist_site
-    return PinchGrasp(centre=site.rot.T @ (meet - site.pos), close=best, gap_m=float(gap(best)), fingers=fingers)
+    meet = kin.points(best)[[thumb, *tips]].mean(axis=0)
+    return PinchGrasp(centre=kin.hand.wrist_site.to_local(meet), close=best, gap_m=float(best_gap), fingers=fingers)
 
 
 @functools.lru_cache(maxsize=None)
@@ -120,25 +118,25 @@ def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m
     closed as possible while the thumb pad stays ``width_m`` from every pinching pad, and the point
     midway between the thumb pad and the pinching pads there (wrist-site frame, right hand), where
     the object's centre goes so that both sides close in on it together."""
-    kin, site = _kinematics(hand_name), load_hand(hand_name).wrist_site
+    kin = _kinematics(hand_name)
     thumb, tips = _fingertip_rows(kin, pinch_grasp(hand_name).fingers)
     for s in np.linspace(1.0, 0.0, 21):      # ends at s = 0, the open hand, if nothing is wide enough
         q = open_ + s * (close - open_)
         P = kin.points(q)
         if min(np.linalg.norm(P[thumb] - P[t]) for t in tips) >= width_m:
             break
-    P = kin.points(q)
     middle = 0.5 * (P[thumb] + P[tips].mean(axis=0))
-    return q, site.rot.T @ (middle - site.pos)
+    return q, kin.hand.wrist_site.to_local(middle)
 
 
 def fingertips_in_site_frame(hand_name: str, q: np.ndarray) -> np.ndarray:
     """(fingers, 3) fingertip pad points of the right hand at actuator targets ``q``, in the
     wrist-site frame (x lateral, y palm normal, z along the fingers)."""
-    kin, site = _kinematics(hand_name), load_hand(hand_name).wrist_site
-    return (kin.points(q)[1:] - site.pos) @ site.rot
+    kin = _kinematics(hand_name)
+    return kin.hand.wrist_site.to_local(kin.points(q)[1:])
 
 
+@functools.lru_cache(maxsize=None)
 def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
     """Unit vector from the thumb pad to the pinching pads (right hand, wrist-site frame), with the
     hand half closed: the direction across which a pinched object must fit."""
@@ -147,4 +145,6 @@ def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
     thumb, tips = _fingertip_rows(kin, grasp.fingers)
     P = fingertips_in_site_frame(hand_name, 0.5 * (kin.home + grasp.close))
     axis = P[[t - 1 for t in tips]].mean(axis=0) - P[thumb - 1]    # rows of P: fingertips only
-    return axis / np.linalg.norm(axis)
+    axis /= np.linalg.norm(axis)
+    axis.flags.writeable = False        # cached: shared by every caller
+    return axis

@@ -21,6 +21,7 @@ corrects the lowering for a slipped grasp.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import mujoco
@@ -36,6 +37,7 @@ from teleop.pinch_grasp import fingertips_in_site_frame, pinch_axis_in_site_fram
 
 # Palm down, fingers pointing away from the robot (+y world): hand axes (x, y=palm normal, z=fingers).
 PALM_DOWN = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])
+UP = np.array([0.0, 0.0, 1.0])
 # Segment durations in control steps (60 Hz). Closing takes as long as the real hand needs: at its
 # datasheet speeds the RH5DG2's fingers close 1.32 rad in 0.66 s, its thumb yaws 1.18 rad in 0.79 s.
 DURATIONS = {"approach": 60, "descend": 40, "close": 40, "close_late": 50, "hold": 10, "lift": 40,
@@ -66,8 +68,7 @@ def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
     if hand.tabletop_grasp is not None:
         grasp = hand.tabletop_grasp
     elif hand.grasp_probe is not None:
-        site = hand.wrist_site
-        centre = site.rot.T @ (np.asarray(hand.grasp_probe.pos, float) - site.pos)
+        centre = hand.wrist_site.to_local(hand.grasp_probe.pos)
         grasp = TabletopGrasp(centre=centre, close=dict(hand.grasp_probe.close), late=())
     else:
         grasp = TabletopGrasp(centre=np.zeros(3), close={}, late=())
@@ -88,6 +89,7 @@ def approach_pitch(item: dict) -> float:
     return float(item.get("approach_pitch_deg", 0.0))
 
 
+@functools.lru_cache(maxsize=None)
 def level_pinch_pitch(hand_name: str) -> float:
     """The finger pitch (degrees, 0..60) that levels the hand's pinch axis, so that the thumb and
     the fingers come down to the same height beside a low object instead of the lower one landing
@@ -255,23 +257,22 @@ class ScriptedOperator:
             place_z = (self._object_pos(data, item["place"])[2] + target.half_extents[2] + offset_xyz[2]
                        + half_z + RELEASE_GAP_M)
         place = np.array([*place_xy, place_z]) - offset
-        up = np.array([0, 0, 1.0])
         reach = len(tl.frames)
-        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * up, quat=hand_quat, hand=ready)
+        tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)
         tl.add(DURATIONS["descend"], pos=grasp)
         for duration, targets in closing:
             tl.add(duration, hand=targets)
         tl.add(DURATIONS["hold"])
-        tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * up)
+        tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * UP)
         self._look_again(side, item["pick"], data, reach, len(tl.frames))
         carry = len(tl.frames)
-        tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * up)
+        tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP)
         # above the target the operator looks where the object really sits in the hand (it may
         # have slipped while carried) and corrects every later keyframe of this pick for it
         first = len(tl.frames)
         tl.add(DURATIONS["lower"], pos=place)
         tl.add(DURATIONS["open"], hand=open_)
-        tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * up)
+        tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * UP)
         carried_at = tl.frames[first - 1].end_step
         side["corrections"].append((carried_at, item["pick"], offset, slice(first, len(tl.frames))))
         if item["place"] != TABLE_TARGET:
@@ -306,15 +307,14 @@ class ScriptedOperator:
         target += d * (self._wall_distance(data, body, target, d) - DRAG_INSET_M)
         start = target - hook_tip
         end = start + d * distance
-        up = np.array([0, 0, 1.0])
         reach = len(tl.frames)
-        tl.add(DURATIONS["approach"], pos=start + APPROACH_HEIGHT_M * up, quat=_quat(hand_rot), hand=side["open"])
+        tl.add(DURATIONS["approach"], pos=start + APPROACH_HEIGHT_M * UP, quat=_quat(hand_rot), hand=side["open"])
         tl.add(DURATIONS["descend"], pos=start)
         self._look_again(side, item["drag"], data, reach, len(tl.frames))
         tl.add(DURATIONS["close"], hand=hooked)
         tl.add(int(max(DURATIONS["carry"], distance / DRAG_SPEED_M_PER_STEP)), pos=end)
         tl.add(DURATIONS["close"], hand=side["open"])
-        tl.add(DURATIONS["retreat"], pos=end + APPROACH_HEIGHT_M * up)
+        tl.add(DURATIONS["retreat"], pos=end + APPROACH_HEIGHT_M * UP)
 
     def _wall_distance(self, data: mujoco.MjData, body: int, point: np.ndarray, d: np.ndarray) -> float:
         """How far the container's own wall is from ``point`` (inside it) along ``d``: a ray against

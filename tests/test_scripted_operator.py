@@ -12,6 +12,8 @@ from sim.tasks import load_task, parse_task
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator, hand_grasp, place_offset
 
+from catalog_files import edited_catalog_file
+
 SEED = 2      # a demonstration sample in which all four fruit stay on the plate
 
 
@@ -47,16 +49,12 @@ def test_left_grasp_mirrors_right():
 
 
 def test_tabletop_grasp_with_unknown_actuator_names_file_and_field(tmp_path, monkeypatch):
-    raw = yaml.safe_load((description.HANDS_DIR / "rh5dg2.yaml").read_text())
-    raw["tabletop_grasp"]["late"] = ["thumb_twist"]
-    (tmp_path / "rh5dg2.yaml").write_text(yaml.safe_dump(raw))
-    monkeypatch.setattr(description, "HANDS_DIR", tmp_path)
-    description.load_hand.cache_clear()
-    try:
+    def late_thumb_twist(raw):
+        raw["tabletop_grasp"]["late"] = ["thumb_twist"]
+
+    with edited_catalog_file(monkeypatch, tmp_path, "hands", "rh5dg2", late_thumb_twist):
         with pytest.raises(ValueError, match=r"rh5dg2.yaml: field 'tabletop_grasp.late': 'thumb_twist'"):
             description.load_hand("rh5dg2")
-    finally:
-        description.load_hand.cache_clear()
 
 
 def test_negative_rolling_friction_is_refused(tmp_path):

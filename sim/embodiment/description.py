@@ -107,6 +107,10 @@ class Transform:
     def inverse(self) -> "Transform":
         return Transform(-self.rot.T @ self.pos, self.rot.T)
 
+    def to_local(self, points) -> np.ndarray:
+        """Points (3,) or (n, 3) given in the parent frame, expressed in this frame."""
+        return (np.asarray(points, float) - self.pos) @ self.rot
+
     @property
     def quat(self) -> np.ndarray:
         return mat_to_quat(self.rot)

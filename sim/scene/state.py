@@ -79,7 +79,7 @@ class SceneObserver:
 
     def object_states(self, data: mujoco.MjData, names=None) -> dict[str, ObjectState]:
         group = self._group(tuple(names)) if names else self._task_objects
-        return group.states(data, self._fixed)
+        return group.states(data)
 
     def object_pose_into(self, data: mujoco.MjData, out: np.ndarray) -> None:
         """The task objects' (pos, wxyz quat) rows, in ``scene.object_names`` order, written into ``out``
@@ -117,6 +117,7 @@ class _ObjectGroup:
 
     def __init__(self, scene: Scene, names: tuple, fixed: dict[str, ObjectState]):
         self.names = names
+        self.fixed = fixed
         free = [n for n in names if n not in fixed]
         self.free_names = free
         self.free_rows = np.array([names.index(n) for n in free], dtype=np.intp)
@@ -127,7 +128,7 @@ class _ObjectGroup:
         self.bodies = np.array([scene.object_body_ids[n] for n in free], dtype=np.intp)
         self.all_free = len(free) == len(names)
 
-    def states(self, data: mujoco.MjData, fixed: dict[str, ObjectState]) -> dict[str, ObjectState]:
+    def states(self, data: mujoco.MjData) -> dict[str, ObjectState]:
         pose, twist = data.qpos[self.pose_idx], data.qvel[self.twist_idx]     # fresh arrays: rows are ours
         rot = data.xmat[self.bodies].reshape(-1, 3, 3)
         # free-joint qvel is (world linear velocity, body-frame angular velocity); the stacked matmul
@@ -137,7 +138,7 @@ class _ObjectGroup:
                 for i, name in enumerate(self.free_names)}
         if self.all_free:
             return free
-        return {n: free[n] if n in free else fixed[n] for n in self.names}
+        return {n: free[n] if n in free else self.fixed[n] for n in self.names}
 
     def pose_into(self, data: mujoco.MjData, out: np.ndarray) -> None:
         if self.all_free:

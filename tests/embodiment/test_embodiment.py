@@ -9,7 +9,6 @@ import os
 import mujoco
 import numpy as np
 import pytest
-import yaml
 
 import sim.physics as physics
 from sim.embodiment import ArmKinematics, description, embodiment_names, load_embodiment
@@ -19,6 +18,7 @@ from sim.embodiment.mirror import M
 from sim.embodiment.reach import reach_along
 from sim.render import MJ_TO_CV, intrinsic_matrix
 
+from catalog_files import edited_catalog_file
 from embodiment_scenes import fresh_data, robot_scene
 
 SIDES = ("left", "right")
@@ -40,16 +40,9 @@ def test_unknown_embodiment_lists_valid_names():
 
 
 def test_arm_without_reach_names_file_and_field(tmp_path, monkeypatch):
-    raw = yaml.safe_load((description.ARMS_DIR / "rm65.yaml").read_text())
-    del raw["reach"]
-    (tmp_path / "rm65.yaml").write_text(yaml.safe_dump(raw))
-    monkeypatch.setattr(description, "ARMS_DIR", tmp_path)
-    description.load_arm.cache_clear()
-    try:
+    with edited_catalog_file(monkeypatch, tmp_path, "arms", "rm65", lambda raw: raw.pop("reach")):
         with pytest.raises(ValueError, match=r"rm65.yaml: field 'reach': .*missing"):
             description.load_arm("rm65")
-    finally:
-        description.load_arm.cache_clear()
 
 
 def test_compiles_and_layout(embodiment, scene):

@@ -21,6 +21,8 @@ from sim.embodiment.mirror import M
 from sim.embodiment.real_model import HAND_MODEL_ENV, MENAGERIE_ENV, RealModelError, load_model_spec
 from tactile.rig import TactileRig
 
+from catalog_files import edited_catalog_file
+
 SHARED_MENAGERIE = Path(__file__).resolve().parents[3] / "shared" / "models" / "menagerie"
 REST_STEPS = 1000
 REST_DRIFT_M = 1e-3
@@ -297,19 +299,10 @@ def test_pads_stand_proud_of_the_real_fingertips(name):
 ])
 def test_a_bad_real_model_block_names_the_file_and_the_field(tmp_path, monkeypatch, field, edit, expected):
     """The block is validated against the hand when the hand file loads, models present or not."""
-    import yaml
-
     from sim.embodiment import description
 
     hand = load_embodiment(REAL[0]).hand
-    data = yaml.safe_load(hand.path.read_text())
-    edit(data["real_model"])
-    (tmp_path / f"{hand.name}.yaml").write_text(yaml.safe_dump(data))
-    monkeypatch.setattr(description, "HANDS_DIR", tmp_path)
-    description.load_hand.cache_clear()
-    try:
+    with edited_catalog_file(monkeypatch, tmp_path, "hands", hand.name, lambda raw: edit(raw["real_model"])) as path:
         with pytest.raises(description.DescriptionError) as err:
             description.load_hand(hand.name)
-    finally:
-        description.load_hand.cache_clear()
-    assert str(tmp_path / f"{hand.name}.yaml") in str(err.value) and expected in str(err.value)
+    assert str(path) in str(err.value) and expected in str(err.value)
