@@ -2,20 +2,20 @@
 
 A task declares its table, its objects (primitives and generated shapes built by b2d, or mesh
 files; fixed or free, with articulated links), where they start (a pose or a placement zone), an
-optional scripted demonstration plan and its `metrics` block, which the shared evaluator compiles
-at load time. No task needs Python of its own. Masses, frictions and densities are range-checked
+optional scripted demonstration plan (sim/demo_plan.py) and its `metrics` block, which the shared
+evaluator compiles at load time. No task needs Python of its own. Masses, frictions and densities are range-checked
 (`sim.scene.fields`).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from sim.demo_plan import parse_plan
 from sim.errors import SpecError
 from evaluation import EpisodeEvaluator, TaskContext, TaskSpecError
 from evaluation.state import ObjectInfo
@@ -246,68 +246,6 @@ def _parse_points(path, raw) -> dict[str, list]:
     return points
 
 
-PLAN_STEP = "{hand, pick, place} or {hand, drag, to_zone}"
-PICK_KEYS = ("hand", "pick", "place", "place_offset", "grasp", "approach_pitch_deg", "after")
-DRAG_KEYS = ("hand", "drag", "to_zone", "after")
-PLAN_GRASPS = ("power", "pinch")
-TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
-APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
-def _parse_plan(path, raw, objects, zones) -> list[dict]:
-    """The scripted operator's plan (teleop/scripted_operator.py): pick-and-place steps
-    {hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [after]} (place: an object, or
-    `table` with place_offset the spot on the table to set the object down at) and drag steps {hand,
-    drag, to_zone, [after]} that pull a container across the table into a zone; `after` lists earlier
-    steps (by index) that must end before this one starts (the hands otherwise work at once). Every
-    field is checked here, so a bad plan fails when the task loads, naming the step."""
-    plan = raw.get("demo_plan") or []
-    if not isinstance(plan, list):
-        raise SpecError(path, "demo_plan", f"a list of steps {PLAN_STEP}", plan)
-    for i, step in enumerate(plan):
-        where = f"demo_plan[{i}]"
-        if not isinstance(step, dict):
-            raise SpecError(path, where, f"a mapping {PLAN_STEP}", step)
-        allowed = DRAG_KEYS if "drag" in step else PICK_KEYS
-        for key in step:
-            if key not in allowed:
-                raise SpecError(path, f"{where}.{key}", f"one of the step's fields {list(allowed)}", step[key])
-        for key in (DRAG_KEYS if "drag" in step else PICK_KEYS)[:3]:     # the required ones
-            if key not in step:
-                raise SpecError(path, f"{where}.{key}", "a value")
-        if step["hand"] not in ("left", "right"):
-            raise SpecError(path, f"{where}.hand", "'left' or 'right'", step["hand"])
-        after = step.get("after", [])
-        if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < i
-                                                  for j in after):
-            raise SpecError(path, f"{where}.after", f"a list of earlier step indices (0..{i - 1})", after)
-        for key in ("pick", "place", "drag"):
-            if key in step and step[key] not in objects and not (key == "place" and step[key] == TABLE_TARGET):
-                also = f" or {TABLE_TARGET!r}" if key == "place" else ""
-                raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}{also}", step[key])
-        if "drag" in step:
-            if step["to_zone"] not in zones:
-                raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(zones)}", step["to_zone"])
-            if objects[step["drag"]].interior_half_extents is None:
-                containers = sorted(n for n, o in objects.items() if o.interior_half_extents is not None)
-                raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
-            continue
-        offset = step.get("place_offset", [0.0, 0.0])
-        if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
-            raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
-        if step.get("grasp", "power") not in PLAN_GRASPS:
-            raise SpecError(path, f"{where}.grasp", f"one of {list(PLAN_GRASPS)}", step["grasp"])
-        lo, hi = APPROACH_PITCH_RANGE_DEG
-        pitch = step.get("approach_pitch_deg", 0.0)
-        if not _is_number(pitch) or not lo <= pitch <= hi:
-            raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
-    return plan
-
-
 def task_context(task: TaskSpec) -> TaskContext:
     """The evaluator's static view of a task: object boxes and cavities, zones, table-relative
     points and the articulated joints."""
@@ -353,7 +291,7 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
         objects=objects,
         zones=zones,
         points=_parse_points(path, raw),
-        demo_plan=_parse_plan(path, raw, objects, zones),
+        demo_plan=parse_plan(path, raw, objects, zones),
         metrics=raw["metrics"],
         source=Path(path),
         raw=raw,

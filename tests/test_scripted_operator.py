@@ -10,7 +10,8 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.recorder import record_episode
-from teleop.scripted_operator import ScriptedOperator, hand_grasp, place_offset
+from teleop.plan_steps.pick_place import place_offset
+from teleop.scripted_operator import ScriptedOperator, hand_grasp
 
 from catalog_files import edited_catalog_file
 

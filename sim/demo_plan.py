@@ -1,0 +1,107 @@
+"""A task's `demo_plan`: what the scripted operator (teleop/scripted_operator.py) does, step by step.
+
+Each step is one kind from STEP_KINDS, named by the field that says what it acts on: `pick` (carry
+an object to a target), `drag` (pull a container into a zone). Every field is checked when the
+task loads, so a bad plan fails then, naming the step and the field. A new kind is a new entry here
+with its check, and a planner in teleop/plan_steps/.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from sim.errors import SpecError
+
+TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
+PLAN_GRASPS = ("power", "pinch")
+APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
+HANDS = ("left", "right")
+
+
+@dataclass(frozen=True)
+class StepKind:
+    required: tuple[str, ...]
+    optional: tuple[str, ...]
+    check: Callable               # (path, where, step, objects, zones) -> None; raises SpecError
+
+    @property
+    def fields(self) -> tuple[str, ...]:
+        return self.required + self.optional
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _check_object(path, where: str, step: dict, key: str, objects: dict, extra: tuple[str, ...] = ()) -> None:
+    if step[key] not in objects and step[key] not in extra:
+        also = "".join(f" or {e!r}" for e in extra)
+        raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}{also}", step[key])
+
+
+def _check_pick(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+    """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [after]}: place is an object,
+    or `table` with place_offset the spot on the table top to set the object down at."""
+    _check_object(path, where, step, "pick", objects)
+    _check_object(path, where, step, "place", objects, extra=(TABLE_TARGET,))
+    offset = step.get("place_offset", [0.0, 0.0])
+    if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
+        raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
+    if step.get("grasp", "power") not in PLAN_GRASPS:
+        raise SpecError(path, f"{where}.grasp", f"one of {list(PLAN_GRASPS)}", step["grasp"])
+    lo, hi = APPROACH_PITCH_RANGE_DEG
+    pitch = step.get("approach_pitch_deg", 0.0)
+    if not _is_number(pitch) or not lo <= pitch <= hi:
+        raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
+
+
+def _check_drag(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+    """{hand, drag, to_zone, [after]}: pull a container across the table until it is over the zone."""
+    _check_object(path, where, step, "drag", objects)
+    if step["to_zone"] not in zones:
+        raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(zones)}", step["to_zone"])
+    if objects[step["drag"]].interior_half_extents is None:
+        containers = sorted(n for n, o in objects.items() if o.interior_half_extents is not None)
+        raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
+
+
+STEP_KINDS: dict[str, StepKind] = {
+    "pick": StepKind(("hand", "pick", "place"), ("place_offset", "grasp", "approach_pitch_deg", "after"), _check_pick),
+    "drag": StepKind(("hand", "drag", "to_zone"), ("after",), _check_drag),
+}
+PLAN_STEP = " or ".join("{" + ", ".join(k.required) + ", ...}" for k in STEP_KINDS.values())
+
+
+def step_kind(step: dict) -> str:
+    """The kind of a (checked) plan step: the one STEP_KINDS key among its fields."""
+    return next(kind for kind in STEP_KINDS if kind in step)
+
+
+def parse_plan(path, raw: dict, objects: dict, zones: dict) -> list[dict]:
+    """The task's `demo_plan`, every step checked. `after` lists earlier steps (by index) that must
+    end before this one starts (the two hands otherwise work at once)."""
+    plan = raw.get("demo_plan") or []
+    if not isinstance(plan, list):
+        raise SpecError(path, "demo_plan", f"a list of steps {PLAN_STEP}", plan)
+    for i, step in enumerate(plan):
+        where = f"demo_plan[{i}]"
+        kinds = [k for k in STEP_KINDS if isinstance(step, dict) and k in step]
+        if len(kinds) != 1:
+            raise SpecError(path, where, f"a mapping with exactly one of {', '.join(map(repr, STEP_KINDS))}: {PLAN_STEP}", step)
+        kind = STEP_KINDS[kinds[0]]
+        for key in step:
+            if key not in kind.fields:
+                raise SpecError(path, f"{where}.{key}", f"one of the step's fields {list(kind.fields)}", step[key])
+        for key in kind.required:
+            if key not in step:
+                raise SpecError(path, f"{where}.{key}", "a value")
+        if step["hand"] not in HANDS:
+            raise SpecError(path, f"{where}.hand", " or ".join(map(repr, HANDS)), step["hand"])
+        after = step.get("after", [])
+        if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < i
+                                                  for j in after):
+            raise SpecError(path, f"{where}.after", f"a list of earlier step indices (0..{i - 1})", after)
+        kind.check(path, where, step, objects, zones)
+    return plan

@@ -1,0 +1,6 @@
+"""The scripted operator's planners, one per plan step kind (sim/demo_plan.py STEP_KINDS): each
+appends the step's wrist keyframes and hand targets to its hand's timeline."""
+
+from teleop.plan_steps import drag, pick_place
+
+PLANNERS = {"pick": pick_place.plan, "drag": drag.plan}

@@ -1,0 +1,76 @@
+"""Plan step `drag`: pull a container across the table into a zone.
+
+The way a person pulls a box or a bowl towards themselves: the hand, palm down and fingers pointing
+into the container over the wall on the side it is to go, curls its fingers (the power grasp's early
+actuators) to hook them inside that wall, draws the container until its centre is over the zone's
+centre, opens and rises. Palm down keeps the arm in the configuration it already has.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from sim.embodiment.mirror import M
+from sim.errors import SpecError
+from sim.scene.sample import zone_centre
+from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
+from teleop.pinch_grasp import fingertips_in_site_frame
+from teleop.plan_steps.pick_place import WALL
+
+if TYPE_CHECKING:
+    from teleop.scripted_operator import ScriptedOperator
+
+DRAG_PITCH_DEG = 20.0         # fingers tilted down into the container
+DRAG_INSET_M = 0.015          # curled fingertips this far inside the leading wall
+DRAG_DEPTH_M = 0.02           # ... and this far below its rim
+DRAG_SPEED_M_PER_STEP = 0.0025  # 0.15 m/s
+
+
+def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    obj = op.scene.task.objects[item["drag"]]
+    body = op.scene.object_body_ids[item["drag"]]
+    centre = data.xpos[body].copy()
+    way = zone_centre(op.scene.task.zones[item["to_zone"]]) - centre[:2]
+    distance = float(np.linalg.norm(way))
+    if distance < 1e-6:
+        return
+    d = np.array([*(way / distance), 0.0])
+    # fingers point at -d: PALM_DOWN's fingers (+y) turned about z
+    hand_rot = yawed(pitched_palm_down(DRAG_PITCH_DEG), np.arctan2(-d[1], -d[0]) - np.pi / 2)
+    hooked = op.power(side, WALL)
+    tips = fingertips_in_site_frame(side["hand"], hooked)[1:]        # the fingers, not the thumb
+    if item["hand"] == "left":
+        tips = tips @ M             # M is its own transpose: each row mirrored
+    hook_tip = hand_rot @ tips.mean(axis=0)                         # curled fingertips from the site
+    target = np.array([*centre[:2], centre[2] + obj.half_extents[2] - DRAG_DEPTH_M])
+    target += d * (wall_distance(op, data, body, target, d) - DRAG_INSET_M)
+    start = target - hook_tip
+    end = start + d * distance
+    reach = len(tl.frames)
+    tl.add(DURATIONS["approach"], pos=start + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot), hand=side["open"])
+    tl.add(DURATIONS["descend"], pos=start)
+    op.look_again(side, item["drag"], data, reach, len(tl.frames))
+    tl.add(DURATIONS["close"], hand=hooked)
+    tl.add(int(max(DURATIONS["carry"], distance / DRAG_SPEED_M_PER_STEP)), pos=end)
+    tl.add(DURATIONS["close"], hand=side["open"])
+    tl.add(DURATIONS["retreat"], pos=end + APPROACH_HEIGHT_M * UP)
+
+
+def wall_distance(op: ScriptedOperator, data: mujoco.MjData, body: int, point: np.ndarray, d: np.ndarray) -> float:
+    """How far the container's own wall is from ``point`` (inside it) along ``d``: a ray against
+    each of its geoms, so a round bowl and a box both come out exact."""
+    model, hits = op.scene.model, []
+    for g in range(model.body_geomadr[body], model.body_geomadr[body] + model.body_geomnum[body]):
+        dist = mujoco.mju_rayGeom(data.geom_xpos[g], data.geom_xmat[g], model.geom_size[g], point, d,
+                                  int(model.geom_type[g]))
+        if dist >= 0:
+            hits.append(dist)
+    if not hits:
+        raise SpecError(op.scene.task.source, "demo_plan.drag", "a container whose walls surround its centre",
+                        f"no wall of {model.body(body).name} along {np.round(d, 3).tolist()}")
+    return min(hits)
