@@ -65,8 +65,9 @@ def test_images_use_the_plugin_codecs_and_a_join_keeps_them_chunk_for_chunk(tmp_
 
 
 def test_streams_grow_past_their_allocation_and_trim_to_the_frames_written(tmp_path):
-    """A stream is grown 64 frames at a time: 150 frames, a key that starts late and one that stops
-    early come back with exactly their frames (a missing late frame is a zero row, as buffered values)."""
+    """A stream is grown 64 frames at a time and small images are written a block of frames at a time:
+    150 frames, a key that starts late, one that stops early and one with a gap come back with exactly
+    their frames (a missing frame is a zero row, as buffered values)."""
     image = np.zeros((32, 32), np.float32)
     with EpisodeWriter(tmp_path / "e.h5", {}) as w:
         for k in range(150):
@@ -76,12 +77,15 @@ def test_streams_grow_past_their_allocation_and_trim_to_the_frames_written(tmp_p
                 frame["late"] = image + 1000
             if k < 65:
                 frame["early"] = image - 1
+            if not 10 <= k < 13:
+                frame["gap"] = image + 0.5
             w.append(frame)
     with h5py.File(tmp_path / "e.h5") as f:
         assert f["image"].shape == (150, 32, 32) and f["image"][:, 0, 0].tolist() == list(range(150))
         assert f["late"].shape == (150, 32, 32) and f["late"][:70].max() == 0
         assert f["late"][70:, 3, 3].tolist() == [1000 + k for k in range(70, 150)]
         assert f["early"].shape == (65, 32, 32) and f["early"][:, 1, 1].tolist() == [k - 1 for k in range(65)]
+        assert f["gap"][:, 2, 2].tolist() == [0.0 if 10 <= k < 13 else k + 0.5 for k in range(150)]
 
 
 def test_compressed_bytes_do_not_depend_on_blosc_threads(tmp_path):
