@@ -1,9 +1,10 @@
 """A task's `demo_plan`: what the scripted operator (teleop/scripted_operator.py) does, step by step.
 
 Each step is one kind from STEP_KINDS, named by the field that says what it acts on: `pick` (carry
-an object to a target), `drag` (pull a container into a zone). Every field is checked when the
-task loads, so a bad plan fails then, naming the step and the field. A new kind is a new entry here
-with its check, and a planner in teleop/plan_steps/.
+an object to a target), `drag` (pull a container into a zone), `pour` (tip a bottle's mouth over a
+target), `press` (press keys or buttons in order), `turn` (swing a lid or a door to a joint angle).
+Every field is checked when the task loads, so a bad plan fails then, naming the step and the field.
+A new kind is a new entry here with its check, and a planner in teleop/plan_steps/.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from sim.errors import SpecError
 TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
 PLAN_GRASPS = ("power", "pinch")
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
+GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
 HANDS = ("left", "right")
 
 
@@ -42,8 +44,10 @@ def _check_object(path, where: str, step: dict, key: str, objects: dict, extra: 
 
 
 def _check_pick(path, where: str, step: dict, objects: dict, zones: dict) -> None:
-    """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [after]}: place is an object,
-    or `table` with place_offset the spot on the table top to set the object down at."""
+    """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
+    [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
+    object down at; grasp_yaw turns the hand about the vertical (degrees, or "across" the object's
+    narrow side); grasp_point is where a power grasp closes, in the object's frame."""
     _check_object(path, where, step, "pick", objects)
     _check_object(path, where, step, "place", objects, extra=(TABLE_TARGET,))
     offset = step.get("place_offset", [0.0, 0.0])
@@ -55,6 +59,15 @@ def _check_pick(path, where: str, step: dict, objects: dict, zones: dict) -> Non
     pitch = step.get("approach_pitch_deg", 0.0)
     if not _is_number(pitch) or not lo <= pitch <= hi:
         raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
+    yaw = step.get("grasp_yaw", 0.0)
+    if yaw != GRASP_YAW_ACROSS and not (_is_number(yaw) and -180.0 <= yaw <= 180.0):
+        raise SpecError(path, f"{where}.grasp_yaw", f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]", yaw)
+    point = step.get("grasp_point", [0.0, 0.0, 0.0])
+    if not isinstance(point, (list, tuple)) or len(point) != 3 or not all(map(_is_number, point)):
+        raise SpecError(path, f"{where}.grasp_point", "[x, y, z] in the object's frame, metres", point)
+    if "grasp_point" in step and step.get("grasp", "power") == "pinch":
+        raise SpecError(path, f"{where}.grasp_point", "no grasp_point with grasp: pinch (the pinch finds its own)",
+                        point)
 
 
 def _check_drag(path, where: str, step: dict, objects: dict, zones: dict) -> None:
@@ -67,9 +80,66 @@ def _check_drag(path, where: str, step: dict, objects: dict, zones: dict) -> Non
         raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
 
 
+def _check_press(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+    """{hand, press: [<object>/<link>, ...], [after]}: press these slide-jointed links (keys, buttons) in order."""
+    keys = sorted(f"{n}/{link.name}" for n, o in objects.items() for link in o.links if link.joint.type == "slide")
+    press = step["press"]
+    if not isinstance(press, list) or not press or not all(isinstance(k, str) and k in keys for k in press):
+        raise SpecError(path, f"{where}.press", f"a non-empty list of slide-jointed links from {keys}", press)
+
+
+POUR_TILT_RANGE_DEG = (50.0, 150.0)  # mouth axis from vertical: a pour threshold .. near upside down
+POUR_DEFAULT_TILT_DEG = 85.0         # a person's pour: the bottle near horizontal, well past 50
+POUR_GRASPS = ("side", *PLAN_GRASPS)  # side: palm against a tall bottle, thumb up (a person's hold)
+POUR_DEFAULT_GRASP = "side"
+
+
+def _check_pour(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+    """{hand, pour, into, [tilt_deg], [grasp], [approach_pitch_deg], [place_offset], [after]}: tip a
+    pourer (an object with a `mouth_axis`) over `into`, then set it down where it was or at
+    place_offset [x, y] of the table top."""
+    pourers = sorted(n for n, o in objects.items() if o.mouth_axis is not None)
+    if step["pour"] not in pourers:
+        raise SpecError(path, f"{where}.pour", f"an object with a mouth_axis from {pourers}", step["pour"])
+    others = sorted(n for n in objects if n != step["pour"])
+    if step["into"] not in others:
+        raise SpecError(path, f"{where}.into", f"an object from {others}", step["into"])
+    lo, hi = POUR_TILT_RANGE_DEG
+    tilt = step.get("tilt_deg", POUR_DEFAULT_TILT_DEG)
+    if not _is_number(tilt) or not lo <= tilt <= hi:
+        raise SpecError(path, f"{where}.tilt_deg", f"degrees in [{lo:g}, {hi:g}]", tilt)
+    if "place_offset" in step:
+        offset = step["place_offset"]
+        if not isinstance(offset, (list, tuple)) or len(offset) != 2 or not all(map(_is_number, offset)):
+            raise SpecError(path, f"{where}.place_offset", "[x, y] of the table top in metres", offset)
+    if step.get("grasp", POUR_DEFAULT_GRASP) not in POUR_GRASPS:
+        raise SpecError(path, f"{where}.grasp", f"one of {list(POUR_GRASPS)}", step["grasp"])
+    lo, hi = APPROACH_PITCH_RANGE_DEG
+    pitch = step.get("approach_pitch_deg", 0.0)
+    if not _is_number(pitch) or not lo <= pitch <= hi:
+        raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
+
+
+def _check_turn(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [after]}: swing a hinge-jointed link (a lid, a
+    door) to an angle within its joint range."""
+    hinges = {f"{n}/{link.name}": link.joint.range for n, o in objects.items() for link in o.links
+              if link.joint.type == "hinge"}
+    if not isinstance(step["turn"], str) or step["turn"] not in hinges:
+        raise SpecError(path, f"{where}.turn", f"a hinge-jointed link from {sorted(hinges)}", step["turn"])
+    lo, hi = hinges[step["turn"]]
+    if not _is_number(step["to"]) or not lo <= step["to"] <= hi:
+        raise SpecError(path, f"{where}.to", f"an angle in rad within the joint range [{lo:g}, {hi:g}]", step["to"])
+
+
 STEP_KINDS: dict[str, StepKind] = {
-    "pick": StepKind(("hand", "pick", "place"), ("place_offset", "grasp", "approach_pitch_deg", "after"), _check_pick),
+    "pick": StepKind(("hand", "pick", "place"),
+                     ("place_offset", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "after"), _check_pick),
     "drag": StepKind(("hand", "drag", "to_zone"), ("after",), _check_drag),
+    "pour": StepKind(("hand", "pour", "into"), ("tilt_deg", "grasp", "approach_pitch_deg", "place_offset", "after"),
+                     _check_pour),
+    "press": StepKind(("hand", "press"), ("after",), _check_press),
+    "turn": StepKind(("hand", "turn", "to"), ("after",), _check_turn),
 }
 PLAN_STEP = " or ".join("{" + ", ".join(k.required) + ", ...}" for k in STEP_KINDS.values())
 

@@ -12,6 +12,7 @@ import numpy as np
 from sim.scene.reach import PALM_DOWN   # fingers pointing away from the robot (+y world)
 
 UP = np.array([0.0, 0.0, 1.0])
+FORWARD = np.array([0.0, 1.0, 0.0])   # palm down, the fingers point this way (world)
 # Segment durations in control steps (60 Hz). Closing takes as long as the real hand needs: at its
 # datasheet speeds the RH5DG2's fingers close 1.32 rad in 0.66 s, its thumb yaws 1.18 rad in 0.79 s.
 DURATIONS = {"approach": 60, "descend": 40, "close": 40, "close_late": 50, "hold": 10, "lift": 40,
@@ -31,6 +32,14 @@ def yawed(R: np.ndarray, yaw: float) -> np.ndarray:
     """``R`` turned by ``yaw`` radians about the world z axis."""
     c, s = np.cos(yaw), np.sin(yaw)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ R
+
+
+def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """Rotation matrix of ``angle`` radians about the unit ``axis``."""
+    q, R = np.zeros(4), np.zeros(9)
+    mujoco.mju_axisAngle2Quat(q, np.asarray(axis, float), angle)
+    mujoco.mju_quat2Mat(R, q)
+    return R.reshape(3, 3)
 
 
 def quat(R: np.ndarray) -> np.ndarray:

@@ -1,9 +1,10 @@
 """Plan step `pick`: carry an object to a target (another object, or a spot of the table).
 
 Approach, descend, close, lift, carry, lower, open, retreat; palm down, or with the fingers pitched
-down (`approach_pitch_deg`). Where the object sits in the hand and how the hand closes come from
-the hand file's palm grasp, or, with `grasp: pinch`, from a pinch found from the hand's kinematics
-(teleop/pinch_grasp.py). Where the object goes comes from `place_offset`.
+down (`approach_pitch_deg`), turned about the vertical (`grasp_yaw`). Where the object sits in the
+hand and how the hand closes come from the hand file's palm grasp (at the object's `grasp_point`), or,
+with `grasp: pinch`, from a pinch found from the hand's kinematics (teleop/pinch_grasp.py). Where
+the object goes comes from `place_offset`.
 """
 
 from __future__ import annotations
@@ -14,9 +15,11 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from sim.demo_plan import TABLE_TARGET
+from sim.demo_plan import GRASP_YAW_ACROSS, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
-from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, LIFT_HEIGHT_M, UP, SideTimeline, pitched_palm_down, quat
+from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
+                                    axis_rotation, pitched_palm_down, quat, yawed)
+from sim.scene.reach import PALM_DOWN
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
 
 if TYPE_CHECKING:
@@ -63,25 +66,61 @@ def grasp_kind(item: dict) -> str:
     return item.get("grasp", "power")
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def grasp_point(item: dict) -> np.ndarray:
+    """A plan step's `grasp_point` [x, y, z] (object frame, metres): where the hand closes, for an
+    object held by a part (a pan by its handle); default its centre. Power grasps only."""
+    return np.asarray(item.get("grasp_point", [0.0, 0.0, 0.0]), float)
+
+
+def grasp_yaw(item: dict, hand_rot: np.ndarray, hand_name: str, body_rot: np.ndarray, half_extents,
+              pinch: bool) -> float:
+    """The turn (radians, about the vertical) a plan step's `grasp_yaw` asks of the hand: degrees, or
+    "across": the hand closes across the object's narrowest horizontal width, as a person picks up a
+    pen or a wrench (the pinch axis along that width; for a power grasp, the fingers curl along it,
+    the object lying across the palm). Of the two turns that do it, the smaller."""
+    value = item["grasp_yaw"]
+    if value != GRASP_YAW_ACROSS:
+        return float(np.radians(value))
+    if pinch:
+        axis = pinch_axis_in_site_frame(hand_name)
+        closing = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
+    else:
+        closing = hand_rot @ (PALM_DOWN.T @ FORWARD)
+    angles = np.radians(np.arange(0.0, 180.0))
+    directions = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
+    widths = np.abs(directions @ body_rot) @ np.asarray(half_extents, float)
+    narrow = angles[int(np.argmin(widths))]
+    turn = narrow - np.arctan2(closing[1], closing[0])
+    return float((turn + np.pi / 2) % np.pi - np.pi / 2)     # a closing direction has no sign
+
+
+def grasp_and_lift(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str,
+                   roll_deg: float = 0.0) -> np.ndarray:
+    """Append the hand's approach to object ``name``, descent, closing and lift (the step's `grasp`
+    and `approach_pitch_deg`; ``roll_deg`` turns the hand about the fingers first, e.g. 90: a tall
+    bottle held from the side, thumb up); return the object centre's offset from the wrist site
+    (world) as held."""
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
-    task = op.scene.task
-    offset_xyz = place_offset(item)
-    obj = task.objects[item["pick"]]
+    obj = op.scene.task.objects[name]
     half_z = obj.half_extents[2]
     pinch = grasp_kind(item) == "pinch"
     if pinch and "approach_pitch_deg" not in item:
         hand_rot = pitched_palm_down(level_pinch_pitch(side["hand"]))
     else:
         hand_rot = pitched_palm_down(approach_pitch(item))
+    if roll_deg:
+        fingers = hand_rot @ (PALM_DOWN.T @ FORWARD)
+        hand_rot = axis_rotation(fingers, np.radians(roll_deg)) @ hand_rot
+    body_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3)
+    if "grasp_yaw" in item:
+        hand_rot = yawed(hand_rot, grasp_yaw(item, hand_rot, side["hand"], body_rot, obj.half_extents, pinch))
     hand_quat = quat(hand_rot)
     open_ = side["open"]
     if pinch:
         # come down with the pads spread wider than the object, its centre midway between them
         axis = pinch_axis_in_site_frame(side["hand"])
         axis = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
-        body_rot = data.xmat[op.scene.object_body_ids[item["pick"]]].reshape(3, 3)
         width = 2.0 * float(np.abs(body_rot.T @ axis) @ obj.half_extents) + PINCH_SPREAD_MARGIN_M
         ready, centre = pinch_preshape(side["hand"], open_, side["pinch_close"], width)
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre)
@@ -89,19 +128,16 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     else:
         # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
         cx, cy, cz = side["grasp_centre"]
-        offset = hand_rot @ np.array([cx, max(cy, half_z + PALM_CLEARANCE_M), cz])
+        if roll_deg:        # the object's depth along the palm normal, rather than its height
+            half_z = float(np.abs(body_rot.T @ hand_rot[:, 1]) @ obj.half_extents)
+        at = body_rot @ grasp_point(item)
+        # the palm clears the object's top, measured from the grasped point rather than its centre
+        offset = hand_rot @ np.array([cx, max(cy, half_z - at[2] + PALM_CLEARANCE_M), cz])
         closing = [(DURATIONS["close"], op.power(side, WALL)), (DURATIONS["close_late"], op.power(side, CLOSED))]
         ready = open_
-    grasp = op.object_pos(data, item["pick"]) - offset
-    if item["place"] == TABLE_TARGET:       # set down at a spot of the table top
-        place_xy = offset_xyz[:2]
-        place_z = op.scene.table_height + offset_xyz[2] + obj.rest_height + RELEASE_GAP_M
-    else:
-        target = task.objects[item["place"]]
-        place_xy = op.object_pos(data, item["place"])[:2] + offset_xyz[:2]
-        place_z = (op.object_pos(data, item["place"])[2] + target.half_extents[2] + offset_xyz[2]
-                   + half_z + RELEASE_GAP_M)
-    place = np.array([*place_xy, place_z]) - offset
+    if not pinch:
+        offset = offset - at        # the hand closes on the grasp point; this is where the centre sits
+    grasp = op.object_pos(data, name) - offset
     reach = len(tl.frames)
     tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)
     tl.add(DURATIONS["descend"], pos=grasp)
@@ -109,16 +145,49 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         tl.add(duration, hand=targets)
     tl.add(DURATIONS["hold"])
     tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * UP)
-    op.look_again(side, item["pick"], data, reach, len(tl.frames))
-    carry = len(tl.frames)
-    tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP)
+    op.look_again(side, name, data, reach, len(tl.frames))
+    return offset
+
+
+def place_centre(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str) -> np.ndarray:
+    """Where object ``name``'s centre is let go: over the step's `place` target at `place_offset`,
+    the release gap above where it comes to rest."""
+    task = op.scene.task
+    offset_xyz = place_offset(item)
+    obj = task.objects[name]
+    if item["place"] == TABLE_TARGET:       # set down at a spot of the table top
+        place_xy = offset_xyz[:2]
+        place_z = op.scene.table_height + offset_xyz[2] + obj.rest_height + RELEASE_GAP_M
+    else:
+        target = task.objects[item["place"]]
+        place_xy = op.object_pos(data, item["place"])[:2] + offset_xyz[:2]
+        place_z = (op.object_pos(data, item["place"])[2] + target.half_extents[2] + offset_xyz[2]
+                   + obj.half_extents[2] + RELEASE_GAP_M)
+    return np.array([*place_xy, place_z])
+
+
+def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray) -> None:
+    """From above ``place`` (the wrist position that lets object ``name`` go where it belongs):
+    lower, open, retreat; before lowering, the operator corrects for how the object has slipped."""
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
     # above the target the operator looks where the object really sits in the hand (it may
     # have slipped while carried) and corrects every later keyframe of this pick for it
     first = len(tl.frames)
     tl.add(DURATIONS["lower"], pos=place)
-    tl.add(DURATIONS["open"], hand=open_)
+    tl.add(DURATIONS["open"], hand=side["open"])
     tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * UP)
     carried_at = tl.frames[first - 1].end_step
-    side["corrections"].append((carried_at, item["pick"], offset, slice(first, len(tl.frames))))
+    side["corrections"].append((carried_at, name, offset, slice(first, len(tl.frames))))
+
+
+def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    offset = grasp_and_lift(op, data, item, item["pick"])
+    place = place_centre(op, data, item, item["pick"]) - offset
+    carry = len(tl.frames)
+    tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP)
+    lower_and_release(op, item, item["pick"], offset, place)
     if item["place"] != TABLE_TARGET:
         op.look_again(side, item["place"], data, carry, len(tl.frames))

@@ -15,6 +15,7 @@ from teleop.recorder import record_episode
 # guarded by tests/test_scripted_operator.py.
 SETTINGS = [
     ("ball_box_loading", "ur5_wuji", 0),
+    ("bimanual_piano_melody", "xarm7_ability", 0),
     ("breadbasket_fast_food_loading", "ur5_rh5dg2", 0),
     ("canned_food_tray_arrangement", "iiwa7_sharpa", 0),
     ("condiment_box_loading", "ur5_wuji", 0),

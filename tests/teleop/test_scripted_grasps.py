@@ -144,3 +144,71 @@ def test_a_misspelt_place_lists_the_objects_and_the_table(tmp_path):
     raw["demo_plan"][1]["place"] = "tabel"
     with pytest.raises(SpecError, match=r"demo_plan\[1\].place'.*or 'table'"):
         parse_task(raw, tmp_path / "bread.yaml")
+
+
+@pytest.mark.parametrize("field, bad", [("grasp_yaw", "sideways"), ("grasp_yaw", 200), ("grasp_yaw", True),
+                                        ("grasp_point", [0.1, 0.0]), ("grasp_point", "handle")])
+def test_bad_grasp_pose_fields_name_file_and_field(tmp_path, field, bad):
+    raw = yaml.safe_load(load_task("ball_box_loading").source.read_text())
+    raw["demo_plan"][0][field] = bad
+    raw["demo_plan"][0].pop("grasp", None)
+    with pytest.raises(SpecError, match=rf"balls.yaml: field 'demo_plan\[0\].{field}'"):
+        parse_task(raw, tmp_path / "balls.yaml")
+
+
+def test_a_pinch_finds_its_own_grasp_point(tmp_path):
+    raw = yaml.safe_load(load_task("ball_box_loading").source.read_text())
+    raw["demo_plan"][0].update(grasp="pinch", grasp_point=[0.0, 0.0, 0.01])
+    with pytest.raises(SpecError, match=r"demo_plan\[0\].grasp_point'.*pinch"):
+        parse_task(raw, tmp_path / "balls.yaml")
+
+
+@pytest.mark.parametrize("pinch", [False, True])
+@pytest.mark.parametrize("yaw_deg", [0.0, 35.0, 70.0, 110.0, 160.0])
+def test_grasp_yaw_across_closes_the_hand_across_the_narrow_side(pinch, yaw_deg):
+    """A bar 0.2 m long and 2.4 cm wide lying at any yaw: the turned hand's closing direction (the
+    pinch axis, or the fingers for a power grasp) runs across the bar, and the turn is the smaller one."""
+    from sim.embodiment.mirror import mirror_vec
+    from teleop.operator_motion import FORWARD, pitched_palm_down, yawed
+    from teleop.pinch_grasp import pinch_axis_in_site_frame
+    from teleop.plan_steps.pick_place import PALM_DOWN, grasp_yaw, level_pinch_pitch
+
+    a = np.radians(yaw_deg)
+    body_rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    long_axis = body_rot[:, 0]
+    for side in ("right", "left"):
+        hand = "orca"
+        hand_rot = pitched_palm_down(level_pinch_pitch(hand) if pinch else 0.0)
+        turn = grasp_yaw({"hand": side, "grasp_yaw": "across"}, hand_rot, hand, body_rot, (0.1, 0.012, 0.005), pinch)
+        assert -np.pi / 2 <= turn < np.pi / 2
+        turned = yawed(hand_rot, turn)
+        axis = pinch_axis_in_site_frame(hand)
+        closing = turned @ ((mirror_vec(axis) if side == "left" else axis) if pinch else PALM_DOWN.T @ FORWARD)
+        horizontal = closing[:2] / np.linalg.norm(closing[:2])
+        assert abs(horizontal @ long_axis[:2]) < np.sin(np.radians(1.0)), (side, np.degrees(turn))
+    assert grasp_yaw({"hand": "right", "grasp_yaw": 30}, hand_rot, hand, body_rot, (0.1, 0.01, 0.01), pinch) == \
+        pytest.approx(np.radians(30))
+
+
+def test_grasp_point_moves_the_grasp_to_that_part_of_the_object(tmp_path):
+    """frypan_stand_pour: a power grasp at the pan's handle puts the wrist over the handle, the pan's
+    frame offset (rotated into the world) from where it goes for the pan's centre; the carried pan is
+    then let go with its centre where it would have gone."""
+    from sim.scene.builder import build_scene
+    from sim.scene.sample import demonstration_sample
+
+    raw = yaml.safe_load(load_task("frypan_stand_pour").source.read_text())
+    handle = [0.15, 0.0, 0.01]
+    wrist = {}
+    for name, extra in (("centre", {}), ("handle", {"grasp_point": handle})):
+        raw["demo_plan"] = [{"hand": "right", "pick": "frypan", "place": "stand", **extra}]
+        task = parse_task(copy.deepcopy(raw), tmp_path / "pan.yaml")
+        scene = build_scene(task, "ur5_schunk", demonstration_sample(task, 0))
+        data = scene.home_data()
+        op = ScriptedOperator()
+        op.reset(scene, data)
+        frames = op.sides["right"]["timeline"].frames
+        wrist[name] = (frames[2].pos, frames[-3].pos)       # descended to grasp; lowered to release
+        pan_rot = data.xmat[scene.object_body_ids["frypan"]].reshape(3, 3)
+    np.testing.assert_allclose(wrist["handle"][0][:2] - wrist["centre"][0][:2], (pan_rot @ handle)[:2], atol=1e-9)
+    np.testing.assert_allclose(wrist["handle"][1][:2] - wrist["centre"][1][:2], (pan_rot @ handle)[:2], atol=1e-9)

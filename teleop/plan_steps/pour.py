@@ -1,0 +1,146 @@
+"""Plan step `pour`: pick up a pourer, tip its mouth over a target, tilt it back and set it down.
+
+The way a person pours from a bottle: grasp it (by default from the side, thumb up; or from above
+as `pick` does, teleop/plan_steps/pick_place.py), lift it, hold it upright above the target, then
+turn the forearm (pronation or supination: a turn about the fingers' heading, the wrist's roomiest
+rotation) until the mouth axis is `tilt_deg` from vertical, the wrist placed so that the mouth (the
+point the evaluator's `tilted_over` measures: the bounding box surface along the object's
+`mouth_axis`) is over the target; hold, turn back upright, carry it to where it came from (or to
+`place_offset` on the table) and set it down. Which way to turn is chosen with the arm's IK: a turn
+that is reached, the palm ending under the pourer (a hand holds best what rests in it), else the
+smaller joint motion.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from evaluation.geometry import axis_extent
+from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, TABLE_TARGET
+from sim.scene.reach import PALM_DOWN
+from teleop.operator_motion import LIFT_HEIGHT_M, UP, SideTimeline, axis_rotation, quat
+from teleop.plan_steps.pick_place import RELEASE_GAP_M, grasp_and_lift, lower_and_release, place_centre
+
+if TYPE_CHECKING:
+    from teleop.scripted_operator import ScriptedOperator
+
+FINGERS_PALM_DOWN = PALM_DOWN.T @ np.array([0.0, 1.0, 0.0])   # the fingers' direction, wrist-site frame
+PALM_NORMAL = PALM_DOWN.T @ np.array([0.0, 0.0, -1.0])         # out of the palm, wrist-site frame
+MOUTH_ABOVE_RIM_M = 0.05      # the tipped mouth this high above the target's top: pours in, touches nothing
+BOTTOM_ABOVE_RIM_M = 0.04     # carried upright over the target, the pourer's bottom clears its top by this
+RIM_INSET_M = 0.03            # the aim stays this far inside a container's cavity walls
+TILT_STEP_DEG = 1.0           # resolution of the turn that reaches the wanted tilt
+SIDE_GRASP_ROLL_DEG = 90.0    # `grasp: side`: the right hand palm towards the body's midline, thumb up
+POUR_DURATIONS = {"to_target": 70, "tilt": 70, "pour": 70, "untilt": 70, "back": 120}
+
+
+def mouth_local(obj) -> np.ndarray:
+    """The pourer's mouth point in its frame, as the evaluator's `tilted_over` takes it."""
+    axis = np.asarray(obj.mouth_axis, float)
+    axis = axis / np.linalg.norm(axis)
+    return axis * axis_extent(axis, obj.half_extents)
+
+
+def aim_point(op: ScriptedOperator, data: mujoco.MjData, name: str) -> np.ndarray:
+    """Where (xy) the mouth goes: the target's origin (what `tilted_over` measures from), moved
+    inside its cavity's walls when it has one, so that what is poured lands in it."""
+    obj = op.scene.task.objects[name]
+    body = op.scene.object_body_ids[name]
+    origin = data.xpos[body].copy()
+    if obj.interior_half_extents is None:
+        return origin[:2]
+    R = data.xmat[body].reshape(3, 3)
+    centre = np.asarray(obj.interior_offset, float)
+    room = np.maximum(np.asarray(obj.interior_half_extents, float)[:2] - RIM_INSET_M, 0.0)
+    local = centre.copy()
+    local[:2] += np.clip(-centre[:2], -room, room)      # origin, relative to the cavity centre, clipped
+    return (origin + R @ local)[:2]
+
+
+def target_top(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str) -> float:
+    """Height of the target's top when the pour comes: an earlier `pick` of the plan may carry it
+    onto something (the operator re-aims in xy when it sets off, but heights come from the plan)."""
+    obj = op.scene.task.objects[name]
+    z = float(op.object_pos(data, name)[2])
+    for earlier in op.scene.task.demo_plan:
+        if earlier is item:
+            break
+        if earlier.get("pick") == name:
+            z = float(place_centre(op, data, earlier, name)[2]) - RELEASE_GAP_M
+    return z + float(obj.half_extents[2])
+
+
+def tilt_turn(side: dict, hand_rot: np.ndarray, obj_rot: np.ndarray, axis_local: np.ndarray,
+              tilt_deg: float, wrist_at, q_seed: np.ndarray) -> np.ndarray:
+    """The world rotation of the hand that tips the pourer's mouth axis ``tilt_deg`` from vertical:
+    a turn about the fingers' (level) heading, whichever way the arm's IK reaches (``wrist_at(R)`` gives the
+    wrist position for turn R), preferring the palm under the pourer, then the smaller joint motion from
+    ``q_seed``."""
+    # the fingers' heading, levelled: a hand pitched down turns about it (forearm plus wrist) so
+    # that the mouth can tip past horizontal; palm down it is the fingers' direction itself
+    fingers = hand_rot @ FINGERS_PALM_DOWN
+    fingers = np.array([fingers[0], fingers[1], 0.0]) / np.linalg.norm(fingers[:2])
+    best = None
+    for sign in (1.0, -1.0):
+        for deg in np.arange(0.0, 180.0 + TILT_STEP_DEG, TILT_STEP_DEG):
+            T = axis_rotation(fingers, sign * np.radians(deg))
+            up = T @ obj_rot @ axis_local
+            if np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0))) >= tilt_deg:
+                break
+        else:
+            continue
+        result = side["kin"].ik(wrist_at(T), quat(T @ hand_rot), q_seed)
+        # reached first; then the pourer lying in the palm rather than hanging from the fingers
+        # (a hand's grip is weakest pulled open), then the smaller joint motion
+        palm_up = float((T @ hand_rot @ PALM_NORMAL)[2])
+        key = (not result.success, -round(palm_up, 3), float(np.abs(result.q - q_seed).sum()))
+        if best is None or key < best[0]:
+            best = (key, T)
+    if best is None:        # only a pourer lying far off upright in the hand could miss it
+        raise ValueError(f"pour: no turn about the fingers tips the mouth axis {tilt_deg:g} degrees")
+    return best[1]
+
+
+def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    name, target = item["pour"], item["into"]
+    obj = op.scene.task.objects[name]
+    start = op.object_pos(data, name)
+    obj_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).copy()
+    grasp = item.get("grasp", POUR_DEFAULT_GRASP)
+    roll = 0.0 if grasp != "side" else SIDE_GRASP_ROLL_DEG * (1.0 if item["hand"] == "right" else -1.0)
+    offset = grasp_and_lift(op, data, item, name, roll_deg=roll)     # object centre from the wrist, as held
+    hand_rot = np.zeros(9)
+    mujoco.mju_quat2Mat(hand_rot, tl.frames[-1].quat)
+    hand_rot = hand_rot.reshape(3, 3)
+    axis_local = np.asarray(obj.mouth_axis, float) / np.linalg.norm(obj.mouth_axis)
+    top = target_top(op, data, item, target)
+    aim = np.array([*aim_point(op, data, target), top + MOUTH_ABOVE_RIM_M])
+    mouth = obj_rot @ mouth_local(obj)                   # object centre -> mouth, upright as grasped
+
+    def wrist_at(T: np.ndarray) -> np.ndarray:           # the held pourer turned by T, its mouth at aim
+        return aim - T @ (offset + mouth)
+
+    # upright above the pour pose, its bottom clear of the target's top
+    bottom = float(np.abs(obj_rot[2]) @ obj.half_extents)
+    q_lift = side["kin"].ik(tl.frames[-1].pos, tl.frames[-1].quat, side["q"]).q
+    T = tilt_turn(side, hand_rot, obj_rot, axis_local, float(item.get("tilt_deg", POUR_DEFAULT_TILT_DEG)),
+                  wrist_at, q_lift)
+    tipped = wrist_at(T)
+    over = tipped.copy()
+    over[2] = max(tipped[2], top + BOTTOM_ABOVE_RIM_M + bottom - offset[2])
+    carry = len(tl.frames)
+    tl.add(POUR_DURATIONS["to_target"], pos=over)
+    tl.add(POUR_DURATIONS["tilt"], pos=tipped, quat=quat(T @ hand_rot))
+    tl.add(POUR_DURATIONS["pour"])
+    tl.add(POUR_DURATIONS["untilt"], pos=over, quat=quat(hand_rot))
+    op.look_again(side, target, data, carry, len(tl.frames))
+    # back down where it came from, or at place_offset of the table
+    spot = {"place": TABLE_TARGET, "place_offset": list(item.get("place_offset", start[:2]))}
+    place = place_centre(op, data, spot, name) - offset
+    tl.add(POUR_DURATIONS["back"], pos=place + LIFT_HEIGHT_M * UP)
+    lower_and_release(op, item, name, offset, place)

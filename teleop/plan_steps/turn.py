@@ -1,0 +1,209 @@
+"""Plan step `turn`: swing a hinged link (a lid, a door) to a joint angle.
+
+The way a person flips a bin lid open by its lip, or swings a door by its handle: the straight
+fingers, tilted towards the hinge, come at the link's handle (its part reaching farthest from the
+hinge) from the side it is to move away from, and push it round its arc about the hinge. As the
+link turns, the fingertips slide along its face towards the hinge as far as the arm needs to keep
+reaching (checked with the arm's IK while planning), and the hand turns with the link so that the
+fingers keep pushing square to the face. At the target angle the hand draws back off the face, so
+nothing drags the link back; a lid pushed past vertical falls open onto its limit, and the next
+`turn` of the same link starts from where gravity leaves it.
+
+Everything comes from the scene: the hinge's anchor and axis (world), the link's geometry (rays
+against its parts find the face to push), the fingertips from the hand's kinematics; the opening
+direction is the one away from the range end nearer joint zero (the link as modelled, shut).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from sim.embodiment.mirror import mirror_vec
+from sim.errors import SpecError
+from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, quat
+from teleop.pinch_grasp import fingertips_in_site_frame
+
+if TYPE_CHECKING:
+    from teleop.scripted_operator import ScriptedOperator
+
+TILTS_DEG = (45.0, 30.0, 15.0, 0.0)  # fingers tilted from the push direction towards the hinge: at first the tips
+                                     # lead, under a lip; straighter later where the arm reaches no further
+PUSH_DEPTH_M = 0.004          # fingertip pads aimed this far into the face: they press on it
+FACE_GAP_M = 0.025            # ... and set down this far off it before pushing
+ARC_STEP_RAD = 0.1            # keyframes this far apart along the arc
+ARC_SPEED_M_PER_STEP = 0.0015  # the contact's speed along the arc: 0.09 m/s
+RADIUS_FRACTIONS = np.linspace(1.03, 0.35, 18)  # contact radii tried, of the handle centre's (outermost first): the
+                                                # tips start under the handle's outer half, clear of what it stands out from
+REACH_TOL_M = 0.008           # a wrist target the IK comes this close to is reached
+IK_PASSES, IK_ITERS = 3, 30   # IK solves per arc point when checking the reach (the operator's: 30 a step)
+GRAVITY_TORQUE_NM = 1e-3      # below this the link stays where it is let go (a door on a vertical hinge)
+RAY_BACKOFF_M = 0.3           # rays start this far off the link, on the pushing side
+
+
+def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    link = Hinge(op.scene.model, data, item["turn"], op.scene.task.source)
+    start = op.__dict__.setdefault("link_angles", {}).get(item["turn"], link.angle)
+    target = float(item["to"])
+    if abs(target - start) < 1e-6:
+        return
+    way = np.sign(target - start)               # +1: the way the joint angle grows
+    tips = fingertips_in_site_frame(side["hand"], side["open"])[1:3]     # index and middle pads
+    tip = tips.mean(axis=0)
+    tip = mirror_vec(tip) if item["hand"] == "left" else tip
+    n = max(1, int(np.ceil(abs(target - start) / ARC_STEP_RAD)))
+    arc = np.linspace(start, target, n + 1)
+    faces = link.faces(way, start)              # contact radius -> face point (world, at ``start``)
+
+    def pose(angle: float, radius: float, tilt: float, gap: float = -PUSH_DEPTH_M) -> tuple[np.ndarray, np.ndarray]:
+        face = link.rotated(faces[radius], angle - start)
+        push = way * link.tangent(face)          # where the face moves as the link turns ``way``
+        inward = -link.radial(face)
+        a = np.radians(tilt)
+        z = np.cos(a) * push + np.sin(a) * inward              # fingers
+        y = inward - (inward @ z) * z if tilt > 0 else -link.axis * way   # palm towards the hinge (or along it, square)
+        y /= np.linalg.norm(y)
+        R = np.column_stack([np.cross(y, z), y, z])
+        return face - gap * push - R @ tip, R
+
+    # along the arc, the outermost contact and the most tilted fingers the arm reaches, neither ever
+    # going back (the fingertips slide in along the face and straighten up against it as it turns)
+    kin, q = side["kin"], side["q"].copy()
+    radii, tilts, choices = [], [], sorted(faces, reverse=True)
+    pos, R = pose(start, choices[0], TILTS_DEG[0], FACE_GAP_M)
+    q = _solve(kin, pos + APPROACH_HEIGHT_M * link.radial(faces[choices[0]]), R, q)
+    for angle in arc:
+        found = None
+        for radius in [r for r in choices if not radii or r <= radii[-1]]:
+            for tilt in [t for t in TILTS_DEG if not tilts or t <= tilts[-1]]:
+                pos, R = pose(angle, radius, tilt)
+                q_try = _solve(kin, pos, R, q)
+                if np.linalg.norm(kin.fk(q_try)[0] - pos) <= REACH_TOL_M:
+                    found, q = (radius, tilt), q_try
+                    break
+            if found:
+                break
+        if found is None:           # out of reach: push on as the last reached pose did, as far as the arm goes
+            found = (radii[-1], tilts[-1]) if radii else (choices[0], TILTS_DEG[0])
+        radii.append(found[0])
+        tilts.append(found[1])
+    first = pose(start, radii[0], tilts[0], FACE_GAP_M)
+    back = link.radial(faces[radii[0]])      # in from beyond the free edge
+    tl.add(DURATIONS["approach"], pos=first[0] + APPROACH_HEIGHT_M * back, quat=quat(first[1]), hand=side["open"])
+    tl.add(DURATIONS["descend"], pos=first[0])
+    previous = (faces[radii[0]], first[0])
+    for angle, radius, tilt in zip(arc, radii, tilts):
+        pos, R = pose(angle, radius, tilt)
+        face = link.rotated(faces[radius], angle - start)
+        moved = max(np.linalg.norm(face - previous[0]), np.linalg.norm(pos - previous[1]))
+        tl.add(max(1, int(np.ceil(moved / ARC_SPEED_M_PER_STEP))), pos=pos, quat=quat(R))
+        previous = (face, pos)
+    # draw back off the face the way the fingers came, then rise clear of the link and what it is on
+    pos = pos - APPROACH_HEIGHT_M * R[:, 2]
+    tl.add(DURATIONS["retreat"], pos=pos)
+    tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
+    # back to where the hand rests: the arm leaves the pose it stretched into around the link
+    tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
+    op.link_angles[item["turn"]] = link.rest_angle(target)
+
+
+def _solve(kin, pos: np.ndarray, R: np.ndarray, q: np.ndarray) -> np.ndarray:
+    for _ in range(IK_PASSES):
+        q = kin.ik(pos, quat(R), q, max_iters=IK_ITERS).q
+    return q
+
+
+def rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    q = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(q, axis, angle)
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, q)
+    return R.reshape(3, 3)
+
+
+class Hinge:
+    """A hinged link as the scene has it now: anchor and axis (world), angle, range, and its handle
+    (the part reaching farthest from the hinge)."""
+
+    def __init__(self, model: mujoco.MjModel, data: mujoco.MjData, name: str, source="demo_plan"):
+        self.model, self.data, self.source = model, data, source
+        joint = model.joint(name)
+        if joint.type[0] != mujoco.mjtJoint.mjJNT_HINGE:
+            raise SpecError(source, "demo_plan.turn", "a hinge-jointed link", name)
+        self.body = int(joint.bodyid[0])
+        self.anchor = data.xanchor[joint.id].copy()
+        self.axis = data.xaxis[joint.id] / np.linalg.norm(data.xaxis[joint.id])
+        self.angle = float(data.qpos[model.jnt_qposadr[joint.id]])
+        self.range = tuple(float(v) for v in model.jnt_range[joint.id])
+        self.geoms = range(model.body_geomadr[self.body], model.body_geomadr[self.body] + model.body_geomnum[self.body])
+        reach = {g: max(np.linalg.norm(self.radial_vec(c)) for c in self._corners(g)) for g in self.geoms}
+        self.handle_geom = max(reach, key=reach.get)
+        self.handle = data.geom_xpos[self.handle_geom].copy()
+        self.handle_radius = float(np.linalg.norm(self.radial_vec(self.handle)))
+
+    def radial_vec(self, p: np.ndarray) -> np.ndarray:
+        """From the hinge axis to ``p``, perpendicular to it."""
+        d = p - self.anchor
+        return d - (d @ self.axis) * self.axis
+
+    def radial(self, p: np.ndarray) -> np.ndarray:
+        r = self.radial_vec(p)
+        return r / np.linalg.norm(r)
+
+    def tangent(self, p: np.ndarray) -> np.ndarray:
+        """The unit direction point ``p`` of the link moves in as the joint angle grows."""
+        return np.cross(self.axis, self.radial(p))
+
+    def rotated(self, p: np.ndarray, angle: float) -> np.ndarray:
+        """Point ``p`` of the link after the joint turns by ``angle``."""
+        return self.anchor + rotation(self.axis, angle) @ (p - self.anchor)
+
+    def faces(self, way: float, start: float) -> dict[float, np.ndarray]:
+        """The link's face on the side it is pushed from, at contact radii (RADIUS_FRACTIONS of the
+        handle's) along the handle's radial line and at the link angle ``start``: rays towards the
+        link against its own parts. Radii whose ray misses the link are left out."""
+        turn = start - self.angle
+        out = {}
+        for f in RADIUS_FRACTIONS:
+            along = self.handle - (self.radial_vec(self.handle)) * (1.0 - f)
+            push = way * self.tangent(along)
+            origin = along - RAY_BACKOFF_M * push
+            hits = []
+            for g in self.geoms:
+                d = mujoco.mju_rayGeom(self.data.geom_xpos[g], self.data.geom_xmat[g], self.model.geom_size[g],
+                                       origin, push, int(self.model.geom_type[g]))
+                if d >= 0:
+                    hits.append(d)
+            if hits:
+                out[float(f * self.handle_radius)] = self.rotated(origin + min(hits) * push, turn)
+        if not out:
+            raise SpecError(self.source, "demo_plan.turn", "a link with a face to push", self.model.body(self.body).name)
+        return out
+
+    def rest_angle(self, angle: float) -> float:
+        """Where the link settles when let go at ``angle``: on the limit gravity turns it towards, or
+        where it is if gravity has no hold on it."""
+        com = self.rotated(self.data.xipos[self.body], angle - self.angle)
+        weight = self.model.body_subtreemass[self.body] * self.model.opt.gravity
+        torque = float(np.cross(com - self.anchor, weight) @ self.axis)
+        if abs(torque) < GRAVITY_TORQUE_NM:
+            return angle
+        return self.range[1] if torque > 0 else self.range[0]
+
+    def _half_extents(self, g: int) -> np.ndarray:
+        size, kind = self.model.geom_size[g], self.model.geom_type[g]
+        if kind == mujoco.mjtGeom.mjGEOM_BOX or kind == mujoco.mjtGeom.mjGEOM_ELLIPSOID:
+            return size.copy()
+        if kind == mujoco.mjtGeom.mjGEOM_CYLINDER:
+            return np.array([size[0], size[0], size[1]])
+        if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+            return np.array([size[0], size[0], size[1] + size[0]])
+        return np.full(3, self.model.geom_rbound[g])
+
+    def _corners(self, g: int) -> list[np.ndarray]:
+        half, R = self._half_extents(g), self.data.geom_xmat[g].reshape(3, 3)
+        return [self.data.geom_xpos[g] + R @ (half * (2 * np.array(s) - 1)) for s in np.ndindex(2, 2, 2)]

@@ -1,0 +1,114 @@
+"""Plan step `turn`: the check refuses what is not a hinge-jointed link or an angle outside its
+range; the keyframes put the fingertips under the bin lid's tab and carry them round the hinge to
+the target angle; and a real episode flips the lid open past vertical."""
+
+import mujoco
+import numpy as np
+import pytest
+import yaml
+
+from sim import physics
+from sim.errors import SpecError
+from sim.scene.builder import build_scene
+from sim.scene.sample import demonstration_sample
+from sim.tasks import load_task, parse_task
+from teleop.demos import DEFAULT_OPERATOR, OPERATORS
+from teleop.pinch_grasp import fingertips_in_site_frame
+from teleop.plan_steps.turn import FACE_GAP_M, Hinge
+from teleop.recorder import home
+from teleop.scripted_operator import ScriptedOperator
+
+TASK, EMBODIMENT, LID = "trash_disposal", "ur5_rh56dfx", "trash_can/lid"
+OPEN_RAD = 1.6
+STAYS_OPEN_RAD = 1.45        # near vertical the lid's joint friction holds it; past vertical it falls open
+
+
+def _raw():
+    """The task file with a plan of one step, the right hand opening the lid."""
+    raw = yaml.safe_load(load_task(TASK).source.read_text())
+    raw["demo_plan"] = [{"hand": "right", "turn": LID, "to": OPEN_RAD}]
+    return raw
+
+
+def _turn_only(tmp_path):
+    raw = _raw()
+    task = parse_task(raw, tmp_path / "bin.yaml")
+    return build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
+
+
+@pytest.mark.parametrize("turn", ["trash_can/tab", "paper/lid", "trash_can", 3, ["trash_can/lid"]])
+def test_turn_refuses_what_is_not_a_hinge_jointed_link(tmp_path, turn):
+    raw = _raw()
+    raw["demo_plan"][0]["turn"] = turn
+    with pytest.raises(SpecError, match=r"bin.yaml: field 'demo_plan\[0\].turn'.*hinge-jointed link from \['trash_can/lid'\]"):
+        parse_task(raw, tmp_path / "bin.yaml")
+
+
+@pytest.mark.parametrize("to", [2.0, -0.1, "open", True, None])
+def test_turn_refuses_an_angle_outside_the_joint_range(tmp_path, to):
+    raw = _raw()
+    raw["demo_plan"][0]["to"] = to
+    with pytest.raises(SpecError, match=r"bin.yaml: field 'demo_plan\[0\].to'.*within the joint range \[0, 1.9\]"):
+        parse_task(raw, tmp_path / "bin.yaml")
+
+
+def test_turn_needs_its_fields(tmp_path):
+    raw = _raw()
+    raw["demo_plan"][0] = {"hand": "right", "turn": LID}
+    with pytest.raises(SpecError, match=r"field 'demo_plan\[0\].to'"):
+        parse_task(raw, tmp_path / "bin.yaml")
+
+
+def _pads(op, frame) -> np.ndarray:
+    """The index and middle pads (world) at a keyframe of the right hand."""
+    side = op.sides["right"]
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, frame.quat)
+    tips = fingertips_in_site_frame(side["hand"], side["open"])[1:3].mean(axis=0)
+    return frame.pos + R.reshape(3, 3) @ tips
+
+
+def test_keyframes_start_under_the_tab_and_end_at_the_target_angle(tmp_path):
+    """Set down: the pads are below the tab (the part reaching farthest from the hinge), within its
+    footprint, no further below its underside than the set-down gap and a pad's thickness. Last arc
+    keyframe: the pads are on the lid turned to the target angle."""
+    scene = _turn_only(tmp_path)
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    lid = Hinge(scene.model, data, LID)
+    g = lid.handle_geom
+    frames = op.sides["right"]["timeline"].frames
+    set_down = _pads(op, frames[2])           # start, approach, set down
+    local = data.geom_xmat[g].reshape(3, 3).T @ (set_down - data.geom_xpos[g])
+    half = scene.model.geom_size[g]
+    assert np.all(np.abs(local[:2]) <= half[:2]), f"pads at {local} of the tab, half size {half}"
+    assert -half[2] - FACE_GAP_M - 0.02 <= local[2] < -half[2], f"pads {local[2]:.3f} m from the tab's centre"
+
+    # last arc keyframe: the pads are against the lid as it stands at the target angle (within a
+    # pad's and the lid's thickness of its mid-plane), between the hinge and the free edge
+    last_arc = _pads(op, frames[-5])          # then retreat, rise, home, and the operator's own return home
+    handle_at_target = lid.rotated(lid.handle, OPEN_RAD - lid.angle)
+    off_plane = (last_arc - lid.anchor) @ lid.tangent(handle_at_target)
+    along = (last_arc - lid.anchor) @ lid.radial(handle_at_target)
+    assert abs(off_plane) < 0.03, f"pads {off_plane:.3f} m off the lid at {OPEN_RAD} rad"
+    assert 0.0 < along < lid.handle_radius, f"pads {along:.3f} m out from the hinge"
+    assert op.link_angles[LID] == pytest.approx(1.9)     # let go past vertical, the lid falls open onto its limit
+
+
+def test_lid_is_flipped_open_through_the_stream_interface(tmp_path):
+    """A real episode on the operator the pipeline records with: the lid ends open, resting past
+    vertical after the hand has left it, and the can has not moved."""
+    scene = _turn_only(tmp_path)
+    data = home(scene)
+    op = OPERATORS[DEFAULT_OPERATOR]()
+    op.reset(scene, data)
+    qadr = scene.model.jnt_qposadr[scene.model.joint(LID).id]
+    can = scene.object_body_ids["trash_can"]
+    start = data.xpos[can].copy()
+    step = 0
+    while not op.done(step):
+        physics.step_control(scene.model, data, op.act(step, data))
+        step += 1
+    assert data.qpos[qadr] >= STAYS_OPEN_RAD, f"lid at {data.qpos[qadr]:.2f} rad"
+    assert np.linalg.norm(data.xpos[can] - start) < 0.01, "the can was pushed"
