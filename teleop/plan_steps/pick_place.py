@@ -33,6 +33,7 @@ WALL, CLOSED = (1.0, 0.0), (1.0, 1.0)
 PINCH_SPREAD_MARGIN_M = 0.025  # pinch pre-shape: pads this much wider apart than the object
 RELEASE_GAP_M = 0.005         # lowered to just above the plate: fruit let go higher bounces and rolls
 PALM_CLEARANCE_M = 0.004
+CARRY_CLEARANCE_M = 0.02      # the carried object's bottom above its target's top, moving across
 
 
 def place_offset(item: dict) -> np.ndarray:
@@ -181,10 +182,22 @@ def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.nd
     side["corrections"].append((carried_at, name, offset, slice(first, len(tl.frames))))
 
 
+def carry_height(op: ScriptedOperator, data: mujoco.MjData, item: dict, offset: np.ndarray) -> float:
+    """The lowest wrist height at which the carried object's bottom clears the top of the step's
+    target by CARRY_CLEARANCE_M: a person lifts a thing over a tall bin's rim before moving it across."""
+    if item["place"] == TABLE_TARGET:
+        return -np.inf
+    task = op.scene.task
+    top = op.object_pos(data, item["place"])[2] + task.objects[item["place"]].half_extents[2]
+    return float(top + CARRY_CLEARANCE_M + task.objects[item["pick"]].half_extents[2] - offset[2])
+
+
 def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     offset = grasp_and_lift(op, data, item, item["pick"])
+    lifted = tl.frames[-1]
+    lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, offset))])
     place = place_centre(op, data, item, item["pick"]) - offset
     carry = len(tl.frames)
     tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP)

@@ -212,3 +212,26 @@ def test_grasp_point_moves_the_grasp_to_that_part_of_the_object(tmp_path):
         pan_rot = data.xmat[scene.object_body_ids["frypan"]].reshape(3, 3)
     np.testing.assert_allclose(wrist["handle"][0][:2] - wrist["centre"][0][:2], (pan_rot @ handle)[:2], atol=1e-9)
     np.testing.assert_allclose(wrist["handle"][1][:2] - wrist["centre"][1][:2], (pan_rot @ handle)[:2], atol=1e-9)
+
+
+def test_a_carried_object_clears_its_targets_top_before_it_moves_across():
+    """ball_box_loading: every ball is lifted until its bottom is above the box's top (plus the
+    clearance) before it is carried over, instead of sweeping across at a fixed lift into the rim."""
+    from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M
+
+    scene = demonstration_scene("ball_box_loading", "ur5_wuji", 0)
+    data = scene.home_data()
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    task = scene.task
+    picks = [s for s in task.demo_plan if "pick" in s]
+    checked = 0
+    for side in op.sides.values():
+        for (_, name, offset, lowered), step in zip(side["corrections"], [s for s in picks if op.sides[s["hand"]] is side]):
+            lifted = side["timeline"].frames[lowered.start - 2]     # lift, carry, then lower
+            bottom = lifted.pos[2] + offset[2] - task.objects[name].half_extents[2]
+            target = step["place"]
+            top = data.xpos[scene.object_body_ids[target]][2] + task.objects[target].half_extents[2]
+            assert bottom >= top + CARRY_CLEARANCE_M - 1e-9, (name, bottom, top)
+            checked += 1
+    assert checked == len(picks)
