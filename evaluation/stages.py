@@ -96,6 +96,7 @@ class StageGraph:
                     raise TaskSpecError(f"{field}[{i}].depends_on[{j}]", f"another stage id {one_of(ids)}", d, source)
             self.depends_on[sid] = list(dict.fromkeys(deps))
         self.latch_order = self._order(self.depends_on, field, "depends_on", "an acyclic dependency graph", source)
+        self._stateful = {k for k, p in self.predicates.items() if self.depends_on[k] and _has_memory(p)}
         self.eval_order = self._order(refs, field, "predicate", "no cycle of {stage: ...} references", source)
         self.depth: dict[str, int] = {}
         for k in self.latch_order:
@@ -116,9 +117,14 @@ class StageGraph:
             p.reset()
 
     def evaluate(self, step: EvalStep) -> dict[str, bool]:
-        """Each stage predicate once, in reference order; ``step.stage_value`` is filled as we go."""
+        """Each stage predicate once, in reference order; ``step.stage_value`` is filled as we go.
+        A stage's events count from when its dependencies hold: the memory of a stateful predicate
+        (key presses, strikes, sequences) is cleared at every update before they are all latched, so a
+        button pressed while the mouse was still being carried is not the click that comes after."""
         values = step.stage_value
         for k in self.eval_order:
+            if k in self._stateful and not all(step.latched[d] for d in self.depends_on[k]):
+                self.predicates[k].reset()
             values[k] = bool(self.predicates[k](step))
         return dict(values)
 
@@ -140,3 +146,7 @@ class StageGraph:
     def max_depth(self, flags: Mapping[str, bool]) -> int:
         """Longest dependency chain ending at a flagged stage (0 if none)."""
         return max((self.depth[k] for k in self.ids if flags[k]), default=0)
+
+
+def _has_memory(condition: Condition) -> bool:
+    return condition.stateful or any(_has_memory(c) for c in condition.children())

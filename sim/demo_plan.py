@@ -23,10 +23,18 @@ HANDS = ("left", "right")
 
 
 @dataclass(frozen=True)
+class PlanScope:
+    """What a plan step may name: the task's objects (name -> ObjectSpec), zones and points."""
+    objects: dict
+    zones: dict
+    points: dict
+
+
+@dataclass(frozen=True)
 class StepKind:
     required: tuple[str, ...]
     optional: tuple[str, ...]
-    check: Callable               # (path, where, step, objects, zones) -> None; raises SpecError
+    check: Callable               # (path, where, step, scope: PlanScope) -> None; raises SpecError
 
     @property
     def fields(self) -> tuple[str, ...]:
@@ -43,13 +51,13 @@ def _check_object(path, where: str, step: dict, key: str, objects: dict, extra: 
         raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}{also}", step[key])
 
 
-def _check_pick(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
     [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
     object down at; grasp_yaw turns the hand about the vertical (degrees, or "across" the object's
     narrow side); grasp_point is where a power grasp closes, in the object's frame."""
-    _check_object(path, where, step, "pick", objects)
-    _check_object(path, where, step, "place", objects, extra=(TABLE_TARGET,))
+    _check_object(path, where, step, "pick", scope.objects)
+    _check_object(path, where, step, "place", scope.objects, extra=(TABLE_TARGET,))
     offset = step.get("place_offset", [0.0, 0.0])
     if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
         raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
@@ -70,19 +78,20 @@ def _check_pick(path, where: str, step: dict, objects: dict, zones: dict) -> Non
                         point)
 
 
-def _check_drag(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+def _check_drag(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, drag, to_zone, [after]}: pull a container across the table until it is over the zone."""
-    _check_object(path, where, step, "drag", objects)
-    if step["to_zone"] not in zones:
-        raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(zones)}", step["to_zone"])
-    if objects[step["drag"]].interior_half_extents is None:
-        containers = sorted(n for n, o in objects.items() if o.interior_half_extents is not None)
+    _check_object(path, where, step, "drag", scope.objects)
+    if step["to_zone"] not in scope.zones:
+        raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(scope.zones)}", step["to_zone"])
+    if scope.objects[step["drag"]].interior_half_extents is None:
+        containers = sorted(n for n, o in scope.objects.items() if o.interior_half_extents is not None)
         raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
 
 
-def _check_press(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+def _check_press(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, press: [<object>/<link>, ...], [after]}: press these slide-jointed links (keys, buttons) in order."""
-    keys = sorted(f"{n}/{link.name}" for n, o in objects.items() for link in o.links if link.joint.type == "slide")
+    keys = sorted(f"{n}/{link.name}" for n, o in scope.objects.items() for link in o.links
+                  if link.joint.type == "slide")
     press = step["press"]
     if not isinstance(press, list) or not press or not all(isinstance(k, str) and k in keys for k in press):
         raise SpecError(path, f"{where}.press", f"a non-empty list of slide-jointed links from {keys}", press)
@@ -94,16 +103,17 @@ POUR_GRASPS = ("side", *PLAN_GRASPS)  # side: palm against a tall bottle, thumb 
 POUR_DEFAULT_GRASP = "side"
 
 
-def _check_pour(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+def _check_pour(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, pour, into, [tilt_deg], [grasp], [approach_pitch_deg], [place_offset], [after]}: tip a
-    pourer (an object with a `mouth_axis`) over `into`, then set it down where it was or at
-    place_offset [x, y] of the table top."""
-    pourers = sorted(n for n, o in objects.items() if o.mouth_axis is not None)
+    pourer (an object with a `mouth_axis`) over `into` (an object, or a task point: poured just above
+    it), then set it down where it was or at place_offset [x, y] of the table top."""
+    pourers = sorted(n for n, o in scope.objects.items() if o.mouth_axis is not None)
     if step["pour"] not in pourers:
         raise SpecError(path, f"{where}.pour", f"an object with a mouth_axis from {pourers}", step["pour"])
-    others = sorted(n for n in objects if n != step["pour"])
-    if step["into"] not in others:
-        raise SpecError(path, f"{where}.into", f"an object from {others}", step["into"])
+    others = sorted(n for n in scope.objects if n != step["pour"])
+    if not isinstance(step["into"], str) or (step["into"] not in others and step["into"] not in scope.points):
+        raise SpecError(path, f"{where}.into", f"an object from {others} or a point from {sorted(scope.points)}",
+                        step["into"])
     lo, hi = POUR_TILT_RANGE_DEG
     tilt = step.get("tilt_deg", POUR_DEFAULT_TILT_DEG)
     if not _is_number(tilt) or not lo <= tilt <= hi:
@@ -120,10 +130,10 @@ def _check_pour(path, where: str, step: dict, objects: dict, zones: dict) -> Non
         raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
 
 
-def _check_turn(path, where: str, step: dict, objects: dict, zones: dict) -> None:
+def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, turn: <object>/<link>, to: <angle, rad>, [after]}: swing a hinge-jointed link (a lid, a
     door) to an angle within its joint range."""
-    hinges = {f"{n}/{link.name}": link.joint.range for n, o in objects.items() for link in o.links
+    hinges = {f"{n}/{link.name}": link.joint.range for n, o in scope.objects.items() for link in o.links
               if link.joint.type == "hinge"}
     if not isinstance(step["turn"], str) or step["turn"] not in hinges:
         raise SpecError(path, f"{where}.turn", f"a hinge-jointed link from {sorted(hinges)}", step["turn"])
@@ -149,7 +159,7 @@ def step_kind(step: dict) -> str:
     return next(kind for kind in STEP_KINDS if kind in step)
 
 
-def parse_plan(path, raw: dict, objects: dict, zones: dict) -> list[dict]:
+def parse_plan(path, raw: dict, scope: PlanScope) -> list[dict]:
     """The task's `demo_plan`, every step checked. `after` lists earlier steps (by index) that must
     end before this one starts (the two hands otherwise work at once)."""
     plan = raw.get("demo_plan") or []
@@ -159,7 +169,8 @@ def parse_plan(path, raw: dict, objects: dict, zones: dict) -> list[dict]:
         where = f"demo_plan[{i}]"
         kinds = [k for k in STEP_KINDS if isinstance(step, dict) and k in step]
         if len(kinds) != 1:
-            raise SpecError(path, where, f"a mapping with exactly one of {', '.join(map(repr, STEP_KINDS))}: {PLAN_STEP}", step)
+            raise SpecError(path, where, f"a mapping with exactly one of {', '.join(map(repr, STEP_KINDS))}: "
+                                         f"{PLAN_STEP}", step)
         kind = STEP_KINDS[kinds[0]]
         for key in step:
             if key not in kind.fields:
@@ -173,5 +184,5 @@ def parse_plan(path, raw: dict, objects: dict, zones: dict) -> list[dict]:
         if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < i
                                                   for j in after):
             raise SpecError(path, f"{where}.after", f"a list of earlier step indices (0..{i - 1})", after)
-        kind.check(path, where, step, objects, zones)
+        kind.check(path, where, step, scope)
     return plan

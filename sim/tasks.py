@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sim.demo_plan import parse_plan
+from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
 from evaluation import EpisodeEvaluator, TaskContext, TaskSpecError
 from evaluation.state import ObjectInfo
@@ -267,6 +267,7 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
     if not isinstance(raw["objects"], dict) or not raw["objects"]:
         raise SpecError(path, "objects", "a mapping of object name -> object", raw["objects"])
     zones = _parse_zones(path, raw)
+    points = _parse_points(path, raw)
     objects: dict[str, ObjectSpec] = {}
     for n, o in raw["objects"].items():
         objects[n] = _parse_object(path, n, o, zones, dict(objects))
@@ -290,8 +291,8 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
         ),
         objects=objects,
         zones=zones,
-        points=_parse_points(path, raw),
-        demo_plan=parse_plan(path, raw, objects, zones),
+        points=points,
+        demo_plan=parse_plan(path, raw, PlanScope(objects, zones, points)),
         metrics=raw["metrics"],
         source=Path(path),
         raw=raw,

@@ -5,8 +5,8 @@ as `pick` does, teleop/plan_steps/pick_place.py), lift it, hold it upright above
 turn the forearm (pronation or supination: a turn about the fingers' heading, the wrist's roomiest
 rotation) until the mouth axis is `tilt_deg` from vertical, the wrist placed so that the mouth (the
 point the evaluator's `tilted_over` measures: the bounding box surface along the object's
-`mouth_axis`) is over the target; hold, turn back upright, carry it to where it came from (or to
-`place_offset` on the table) and set it down. Which way to turn is chosen with the arm's IK: a turn
+`mouth_axis`) is over the target (an object, or a task point such as a bowl's centre); hold, turn
+back upright, carry it to where it came from (or to `place_offset` on the table) and set it down. Which way to turn is chosen with the arm's IK: a turn
 that is reached, the palm ending under the pourer (a hand holds best what rests in it), else the
 smaller joint motion.
 """
@@ -58,6 +58,12 @@ def aim_point(op: ScriptedOperator, data: mujoco.MjData, name: str) -> np.ndarra
     local = centre.copy()
     local[:2] += np.clip(-centre[:2], -room, room)      # origin, relative to the cavity centre, clipped
     return (origin + R @ local)[:2]
+
+
+def point_world(op: ScriptedOperator, name: str) -> np.ndarray:
+    """A task point in the world: its z is from the table top, as the evaluator resolves it
+    (sim/tasks.py task_context: every task point is table-relative)."""
+    return np.asarray(op.scene.task.points[name], float) + op.scene.table_height * UP
 
 
 def target_top(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str) -> float:
@@ -118,8 +124,13 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     mujoco.mju_quat2Mat(hand_rot, tl.frames[-1].quat)
     hand_rot = hand_rot.reshape(3, 3)
     axis_local = np.asarray(obj.mouth_axis, float) / np.linalg.norm(obj.mouth_axis)
-    top = target_top(op, data, item, target)
-    aim = np.array([*aim_point(op, data, target), top + MOUTH_ABOVE_RIM_M])
+    if target in op.scene.task.objects:
+        top = target_top(op, data, item, target)
+        aim = np.array([*aim_point(op, data, target), top + MOUTH_ABOVE_RIM_M])
+    else:       # a task point: the mouth straight above it, as high above it as above a rim
+        point = point_world(op, target)
+        top = float(point[2])
+        aim = np.array([point[0], point[1], top + MOUTH_ABOVE_RIM_M])
     mouth = obj_rot @ mouth_local(obj)                   # object centre -> mouth, upright as grasped
 
     def wrist_at(T: np.ndarray) -> np.ndarray:           # the held pourer turned by T, its mouth at aim
@@ -138,7 +149,8 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     tl.add(POUR_DURATIONS["tilt"], pos=tipped, quat=quat(T @ hand_rot))
     tl.add(POUR_DURATIONS["pour"])
     tl.add(POUR_DURATIONS["untilt"], pos=over, quat=quat(hand_rot))
-    op.look_again(side, target, data, carry, len(tl.frames))
+    if target in op.scene.task.objects:     # an object may have been nudged since; a point stays put
+        op.look_again(side, target, data, carry, len(tl.frames))
     # back down where it came from, or at place_offset of the table
     spot = {"place": TABLE_TARGET, "place_offset": list(item.get("place_offset", start[:2]))}
     place = place_centre(op, data, spot, name) - offset

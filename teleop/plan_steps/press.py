@@ -156,6 +156,8 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         tl.add(PRESS_STEPS, pos=down)
         tl.add(HOLD_STEPS)
         tl.add(RELEASE_STEPS, pos=hover)
-        # a free object (a mouse) may have been nudged since: look where it is on setting off for the key
+        if k == len(item["press"]) - 1:     # up off the last key, from wherever it turns out to be
+            tl.add(DURATIONS["retreat"], pos=hover + APPROACH_HEIGHT_M * UP)
+        # a free object (a mouse) may have been nudged or carried since: look where it is on setting
+        # off for the key
         op.look_again(side, name.split("/")[0], data, first, len(tl.frames))
-    tl.add(DURATIONS["retreat"], pos=tl.frames[-1].pos + APPROACH_HEIGHT_M * UP)

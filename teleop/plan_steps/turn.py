@@ -12,6 +12,8 @@ nothing drags the link back; a lid pushed past vertical falls open onto its limi
 Everything comes from the scene: the hinge's anchor and axis (world), the link's geometry (rays
 against its parts find the face to push), the fingertips from the hand's kinematics; the opening
 direction is the one away from the range end nearer joint zero (the link as modelled, shut).
+A link centred on its hinge (a screen swivelling about its middle) is pushed at the free edge
+whose face looks towards the hand.
 """
 
 from __future__ import annotations
@@ -35,12 +37,14 @@ PUSH_DEPTH_M = 0.004          # fingertip pads aimed this far into the face: the
 FACE_GAP_M = 0.025            # ... and set down this far off it before pushing
 ARC_STEP_RAD = 0.1            # keyframes this far apart along the arc
 ARC_SPEED_M_PER_STEP = 0.0015  # the contact's speed along the arc: 0.09 m/s
-RADIUS_FRACTIONS = np.linspace(1.03, 0.35, 18)  # contact radii tried, of the handle centre's (outermost first): the
-                                                # tips start under the handle's outer half, clear of what it stands out from
+# contact radii tried, as fractions of the handle centre's (outermost first): the tips start under the
+# handle's outer half, clear of what it stands out from
+RADIUS_FRACTIONS = np.linspace(1.03, 0.35, 18)
 REACH_TOL_M = 0.008           # a wrist target the IK comes this close to is reached
 IK_PASSES, IK_ITERS = 3, 30   # IK solves per arc point when checking the reach (the operator's: 30 a step)
 GRAVITY_TORQUE_NM = 1e-3      # below this the link stays where it is let go (a door on a vertical hinge)
 RAY_BACKOFF_M = 0.3           # rays start this far off the link, on the pushing side
+EDGE_TOL_M = 0.01             # corners of the handle part this close to its farthest reach make up a free edge
 
 
 def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
@@ -52,6 +56,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     if abs(target - start) < 1e-6:
         return
     way = np.sign(target - start)               # +1: the way the joint angle grows
+    link.choose_edge(way, side["home"][0])
     tips = fingertips_in_site_frame(side["hand"], side["open"])[1:3]     # index and middle pads
     tip = tips.mean(axis=0)
     tip = mirror_vec(tip) if item["hand"] == "left" else tip
@@ -145,6 +150,30 @@ class Hinge:
         self.handle = data.geom_xpos[self.handle_geom].copy()
         self.handle_radius = float(np.linalg.norm(self.radial_vec(self.handle)))
 
+    def choose_edge(self, way: float, hand: np.ndarray) -> None:
+        """A part that spans its hinge (a screen swivelling about its middle) has no handle out on one
+        side: its centre is near the axis and it has a free edge on either side. Take as the handle
+        the middle of the free edge whose pushed face looks towards the hand at ``hand`` (world), so
+        the fingers come at it without reaching round the link. A part out on one side (a lid's
+        tab) keeps its centre."""
+        corners = self._corners(self.handle_geom)
+        reach = np.array([np.linalg.norm(self.radial_vec(c)) for c in corners])
+        if self.handle_radius >= 0.5 * reach.max():
+            return
+        edges = []
+        for far in (corners[int(np.argmax(reach))], None):
+            if far is None:             # the far edge on the other side of the axis from the first
+                away = [i for i, c in enumerate(corners) if self.radial_vec(c) @ self.radial_vec(edges[0]) < 0]
+                if not away:
+                    break
+                far = corners[max(away, key=lambda i: reach[i])]
+            edge = [c for c in corners if self.radial_vec(c) @ self.radial_vec(far) > 0
+                    and np.linalg.norm(self.radial_vec(c)) >= np.linalg.norm(self.radial_vec(far)) - EDGE_TOL_M]
+            edges.append(np.mean(edge, axis=0))
+        # the pushed face looks against the push: the hand should be on that side of the edge
+        self.handle = max(edges, key=lambda e: float(-way * self.tangent(e) @ (hand - e)))
+        self.handle_radius = float(np.linalg.norm(self.radial_vec(self.handle)))
+
     def radial_vec(self, p: np.ndarray) -> np.ndarray:
         """From the hinge axis to ``p``, perpendicular to it."""
         d = p - self.anchor
@@ -181,7 +210,8 @@ class Hinge:
             if hits:
                 out[float(f * self.handle_radius)] = self.rotated(origin + min(hits) * push, turn)
         if not out:
-            raise SpecError(self.source, "demo_plan.turn", "a link with a face to push", self.model.body(self.body).name)
+            raise SpecError(self.source, "demo_plan.turn", "a link with a face to push",
+                            self.model.body(self.body).name)
         return out
 
     def rest_angle(self, angle: float) -> float:

@@ -144,3 +144,18 @@ def test_bad_dt_is_rejected():
     ev = EpisodeEvaluator({"terminal": DOOR_OPEN}, context())
     with pytest.raises(ValueError, match="dt"):
         ev.update(door(0.0)[0], 0.0)
+
+
+def test_presses_before_a_stage_s_dependencies_hold_do_not_count():
+    """gaming_desk_setup's click depends on the mouse being moved: a press while it is still carried
+    (here: before the door opens) is forgotten; the press after it counts."""
+    click = {"key_pressed_sequence": {"keys": ["piano/C4"], "press_threshold": 0.02}}
+    spec = {"terminal": DOOR_OPEN, "stages": [
+        {"id": "open", "predicate": DOOR_OPEN},
+        {"id": "click", "predicate": {"all": [click]}, "depends_on": ["open"]}]}
+    frames = [(0.0, 0.0), (0.0, 0.03), (0.0, 0.0), (1.2, 0.0), (1.2, 0.0), (1.2, 0.03), (1.2, 0.0)]
+    states = [scene({"fridge": FRIDGE, "piano": resting("piano")}, joints={"fridge/door": d, "piano/C4": c})
+              for d, c in frames]
+    _, t = evaluate_states(spec, context(), states, 0.1)
+    assert t["stage_latched"][:, 0].tolist() == [False, False, False, True, True, True, True]
+    assert t["stage_latched"][:, 1].tolist() == [False] * 6 + [True]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from sim import physics
-from sim.demo_plan import parse_plan
+from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
@@ -20,7 +20,7 @@ STEP = {"hand": "right", "pour": "soy_sauce", "into": "stand"}   # clear of the 
 
 def _check(**fields):
     task = load_task(TASK)
-    return parse_plan("t.yaml", {"demo_plan": [{**STEP, **fields}]}, task.objects, task.zones)
+    return parse_plan("t.yaml", {"demo_plan": [{**STEP, **fields}]}, PlanScope(task.objects, task.zones, task.points))
 
 
 @pytest.mark.parametrize("fields, field", [
@@ -52,8 +52,8 @@ def _operator(step):
     return scene, data, op
 
 
-def _tilt_and_reach(scene, pos, R, target_xy):
-    obj = scene.task.objects["soy_sauce"]
+def _tilt_and_reach(scene, pos, R, target_xy, name="soy_sauce"):
+    obj = scene.task.objects[name]
     up = R @ np.asarray(obj.mouth_axis, float)
     mouth = pos + R @ mouth_local(obj)
     return np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0))), float(np.linalg.norm(mouth[:2] - target_xy))
@@ -93,3 +93,76 @@ def test_episode_tips_the_bottle_over_the_target():
         tilt, dist = _tilt_and_reach(scene, data.xpos[body], data.xmat[body].reshape(3, 3), target)
         poured += tilt >= MIN_TILT_DEG and dist <= RADIUS_M
     assert poured >= POUR_DURATIONS["pour"] // 2     # held over the target, well past the dwell
+
+
+# pouring over a task point (the evaluator's target may be a point): a toilet's bowl centre
+POINT_TASK, POINT_EMBODIMENT, POINT = "toilet_lid_cleaner_pour", "xarm7_leap", "bowl_centre"
+POINT_STEP = {"hand": "left", "pour": "cleaner", "into": POINT, "grasp": "pinch"}
+
+
+def _check_point(**fields):
+    task = load_task(POINT_TASK)
+    return parse_plan("t.yaml", {"demo_plan": [{**POINT_STEP, **fields}]},
+                      PlanScope(task.objects, task.zones, task.points))
+
+
+def test_check_refuses_an_unknown_point_naming_objects_and_points():
+    with pytest.raises(SpecError, match=r"demo_plan\[0\]\.into.*an object from \['toilet'\] or a point from "
+                                        r"\['bowl_centre'\]"):
+        _check_point(into="cistern")
+    with pytest.raises(SpecError, match=r"demo_plan\[0\]\.into"):
+        _check_point(into=["bowl_centre"])
+
+
+def test_check_accepts_a_point():
+    assert _check_point()[0]["into"] == POINT
+
+
+def _point_operator():
+    scene = demonstration_scene(POINT_TASK, POINT_EMBODIMENT, 0)
+    scene.task.demo_plan[:] = _check_point()
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    # the point as the evaluator resolves it: its z is from the table top
+    point = np.asarray(scene.task.points[POINT], float) + [0.0, 0.0, scene.table_height]
+    return scene, data, op, point
+
+
+def _mat(q):
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, q)
+    return R.reshape(3, 3)
+
+
+def test_keyframes_tip_the_mouth_just_above_a_point():
+    """The most tipped keyframe holds the cleaner's mouth over the point in xy, tilted well past the
+    threshold, and above the point (not in the bowl's rim) by no more than a hand's width."""
+    scene, data, op, point = _point_operator()
+    side = op.sides["left"]
+    frames = side["timeline"].frames
+    body = scene.object_body_ids["cleaner"]
+    obj = scene.task.objects["cleaner"]
+    grasp = frames[2]                          # descended, about to close: the bottle as it will be held
+    in_hand = _mat(grasp.quat).T @ data.xmat[body].reshape(3, 3)
+    offset = _mat(grasp.quat).T @ (data.xpos[body] - grasp.pos)
+    poses = [(f, _mat(f.quat)) for f in frames]
+    tilted, R = max(poses, key=lambda p: -(p[1] @ in_hand @ np.asarray(obj.mouth_axis, float))[2])
+    tilt, dist = _tilt_and_reach(scene, tilted.pos + R @ offset, R @ in_hand, point[:2], "cleaner")
+    mouth = tilted.pos + R @ offset + R @ in_hand @ mouth_local(obj)
+    assert tilt >= MIN_TILT_DEG + 20 and dist <= RADIUS_M / 4
+    assert 0.0 < mouth[2] - point[2] <= 0.1, f"mouth {mouth[2] - point[2]:.3f} m above the point"
+    assert side["kin"].ik(tilted.pos, tilted.quat, side["q"]).success
+
+
+def test_episode_tips_the_bottle_over_a_point():
+    scene, data, op, point = _point_operator()
+    body = scene.object_body_ids["cleaner"]
+    frames = op.sides["left"]["timeline"].frames
+    pour_end = frames[-7].end_step       # ... tilt, pour; then untilt, back, lower, release (2), rise, home
+    poured = 0
+    for step in range(pour_end):
+        physics.step_control(scene.model, data, op.act(step, data))
+        tilt, dist = _tilt_and_reach(scene, data.xpos[body], data.xmat[body].reshape(3, 3), point[:2], "cleaner")
+        poured += tilt >= MIN_TILT_DEG and dist <= RADIUS_M
+    assert poured >= POUR_DURATIONS["pour"] // 2

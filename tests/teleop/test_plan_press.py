@@ -1,6 +1,7 @@
 """Plan step `press`: the check refuses what is not a slide-jointed link, the pointing hand found
 from the kinematics, the keyframes over the keys, and real presses on the piano."""
 
+import mujoco
 import numpy as np
 import pytest
 import yaml
@@ -8,7 +9,8 @@ import yaml
 from sim import physics
 from sim.embodiment.description import quat_to_mat
 from sim.errors import SpecError
-from sim.scene.builder import demonstration_scene
+from sim.scene.builder import build_scene, demonstration_scene
+from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP, pitched_palm_down
 from teleop.plan_steps.press import CLEARANCE_M, HOVER_M, _kinematics, _lowest, key_geometry, pointing
@@ -103,3 +105,28 @@ def test_piano_episode_plays_the_treble_melody():
     rec = record_episode(scene, ScriptedOperator(), "press", 0, max_steps=600)
     treble = rec.stage_ids.index("treble_melody")
     assert rec.stage_latched[-1, treble]
+
+
+def test_presses_follow_a_key_whose_object_was_moved(tmp_path):
+    """A mouse carried elsewhere before its button is pressed: on setting off, every keyframe of
+    the press, the rise off the button included, moves with it (nothing swings back to where the
+    mouse was when the plan was made)."""
+    raw = yaml.safe_load(load_task("gaming_desk_setup").source.read_text())
+    raw["demo_plan"] = [{"hand": "right", "press": ["mouse/left_button"]}]
+    task = parse_task(raw, tmp_path / "desk.yaml")
+    scene = build_scene(task, "jaka_zu7_dexhand021", demonstration_sample(task, 0))
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    frames = op.sides["right"]["timeline"].frames
+    planned = [f.pos.copy() for f in frames]
+    shift = np.array([-0.05, 0.03, 0.0])
+    adr = scene.model.jnt_qposadr[scene.model.body("mouse").jntadr[0]]
+    data.qpos[adr:adr + 3] += shift
+    mujoco.mj_forward(scene.model, data)
+    op.intent(frames[-1].end_step, data)
+    moved = [f.pos - p for f, p in zip(frames, planned)]
+    approach = 1                                 # the start frame stays; the approach is the first moved
+    assert all(np.allclose(d, shift, atol=1e-5) for d in moved[approach:-1])        # then the operator's return home
+    rise = frames[-2].pos - frames[-3].pos
+    assert np.allclose(rise[:2], 0.0) and rise[2] > 0, "the hand does not rise straight off the button"

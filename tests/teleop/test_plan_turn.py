@@ -112,3 +112,54 @@ def test_lid_is_flipped_open_through_the_stream_interface(tmp_path):
         step += 1
     assert data.qpos[qadr] >= STAYS_OPEN_RAD, f"lid at {data.qpos[qadr]:.2f} rad"
     assert np.linalg.norm(data.xpos[can] - start) < 0.01, "the can was pushed"
+
+
+SCREEN_TASK, SCREEN_EMBODIMENT, SCREEN = "gaming_desk_setup", "jaka_zu7_dexhand021", "monitor/screen"
+SCREEN_HALF_WIDTH_M = 0.3       # the panel's half width: it swivels about its middle
+STRAIGHT_RAD = 0.14             # the task's monitor_straight stage: |angle| within this
+
+
+def _screen_scene(tmp_path):
+    """The gaming desk with a plan of one step: the left hand swivels the screen to face forward."""
+    raw = yaml.safe_load(load_task(SCREEN_TASK).source.read_text())
+    raw["demo_plan"] = [{"hand": "left", "turn": SCREEN, "to": 0.0}]
+    task = parse_task(raw, tmp_path / "desk.yaml")
+    return build_scene(task, SCREEN_EMBODIMENT, demonstration_sample(task, 0))
+
+
+def test_a_link_spanning_its_hinge_is_pushed_at_the_free_edge_facing_the_hand(tmp_path):
+    """The screen's panel is centred on its vertical hinge: the handle is the middle of a free
+    edge (a panel's half width out), the one whose pushed face looks towards the hand; a lid's tab,
+    out on one side, keeps its centre."""
+    scene = _screen_scene(tmp_path)
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    screen = Hinge(scene.model, data, SCREEN)
+    hand = op.sides["left"]["home"][0]
+    way = -1.0                                  # from 0.44 rad to 0
+    screen.choose_edge(way, hand)
+    assert screen.handle_radius == pytest.approx(SCREEN_HALF_WIDTH_M, abs=0.01)
+    assert (-way * screen.tangent(screen.handle)) @ (hand - screen.handle) > 0, "the pushed face looks away from the hand"
+
+    lid_scene = _turn_only(tmp_path)
+    lid_data = home(lid_scene)
+    lid = Hinge(lid_scene.model, lid_data, LID)
+    tab = lid.handle.copy()
+    lid.choose_edge(1.0, lid_scene.model.body("trash_can").pos)
+    assert np.array_equal(lid.handle, tab)
+
+
+def test_screen_is_swivelled_straight_through_the_stream_interface(tmp_path):
+    """A real episode on the operator the pipeline records with: the screen ends facing forward
+    after the hand has left it."""
+    scene = _screen_scene(tmp_path)
+    data = home(scene)
+    op = OPERATORS[DEFAULT_OPERATOR]()
+    op.reset(scene, data)
+    qadr = scene.model.jnt_qposadr[scene.model.joint(SCREEN).id]
+    step = 0
+    while not op.done(step):
+        physics.step_control(scene.model, data, op.act(step, data))
+        step += 1
+    assert abs(data.qpos[qadr]) <= STRAIGHT_RAD, f"screen at {data.qpos[qadr]:.2f} rad"
