@@ -20,6 +20,7 @@ SETTINGS = [
     ("canned_food_tray_arrangement", "iiwa7_sharpa", 0),
     ("condiment_box_loading", "ur5_wuji", 0),
     ("fruit_bowl_loading", "ur5_rh56dfx", 0),
+    ("gaming_desk_setup", "jaka_zu7_dexhand021", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
 ]
