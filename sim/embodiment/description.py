@@ -180,6 +180,9 @@ class ArmDescription:
     # radius (m) around the bimanual home wrist pose in which palm-down wrist poses are reached
     # (``reach.home_radius_m``, measured with ``python -m sim.embodiment.reach``)
     reach_m: float
+    # joints whose IK solutions keep the sign they have in the home seed (the elbow's branch): a
+    # stretched arm would otherwise flip elbow-down and drive its upper arm into the table
+    ik_keep_sign: tuple[str, ...] = ()
 
     @property
     def joints(self) -> list[JointSpec]:
@@ -650,7 +653,21 @@ def load_arm(name: str) -> ArmDescription:
         path=path,
         reach_m=_num(_get(_get(data, "reach", ctx), "home_radius_m", ctx.sub("reach")),
                      ctx.sub("reach.home_radius_m"), positive=True),
+        ik_keep_sign=_keep_sign(data, ctx, [link.joints[0].name for link in links[1:]], seed),
     )
+
+
+def _keep_sign(data: dict, ctx: _Ctx, joint_names: list[str], seed: dict[str, np.ndarray]) -> tuple[str, ...]:
+    names = data.get("ik_keep_sign", []) or []
+    if not isinstance(names, list):
+        ctx.sub("ik_keep_sign").fail(f"expected a list of joint names from {joint_names}")
+    for i, n in enumerate(names):
+        c = ctx.sub(f"ik_keep_sign[{i}]")
+        if n not in joint_names:
+            c.fail(f"{n!r} is not a joint; expected one of {joint_names}")
+        if any(abs(seed[s][joint_names.index(n)]) < 1e-3 for s in seed):
+            c.fail(f"{n!r} is zero in a home seed: it has no sign to keep")
+    return tuple(str(n) for n in names)
 
 
 # --------------------------------------------------------------------------------------------

@@ -19,6 +19,7 @@ from .mirror import side_links, side_transform
 
 POS_TOL_M = 2e-3
 ROT_TOL_RAD = math.radians(2.0)
+KEEP_SIGN_MARGIN_RAD = 0.05   # an `ik_keep_sign` joint stays this far from zero (a straight elbow)
 
 
 def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -108,6 +109,12 @@ class ArmKinematics:
         self.lower = model.lowerPositionLimit.copy()
         self.upper = model.upperPositionLimit.copy()
         self.joint_names = [j.name for j in arm.joints]
+        for name in arm.ik_keep_sign:       # the IK stays on the home seed's branch of these joints
+            k = self.joint_names.index(name)
+            if arm.home_seed[side][k] > 0:
+                self.lower[k] = max(self.lower[k], KEEP_SIGN_MARGIN_RAD)
+            else:
+                self.upper[k] = min(self.upper[k], -KEEP_SIGN_MARGIN_RAD)
 
     @property
     def nq(self) -> int:

@@ -45,6 +45,27 @@ def test_arm_without_reach_names_file_and_field(tmp_path, monkeypatch):
             description.load_arm("rm65")
 
 
+@pytest.mark.parametrize("bad, words", [(["elbow"], "not a joint"), ("elbow_joint", "a list of joint names")])
+def test_a_bad_ik_keep_sign_names_file_and_field(tmp_path, monkeypatch, bad, words):
+    with edited_catalog_file(monkeypatch, tmp_path, "arms", "ur5", lambda raw: raw.update(ik_keep_sign=bad)):
+        with pytest.raises(ValueError, match=rf"ur5.yaml: field 'ik_keep_sign.*{words}"):
+            description.load_arm("ur5")
+
+
+def test_ur5_ik_keeps_the_elbow_on_its_home_side():
+    """A UR5 stretched nearly straight (a lid pushed open, a bin reached over) is solved on the home
+    seed's elbow branch: the IK's elbow limit stops short of zero on that side, for both arms."""
+    emb = load_embodiment("ur5_rh56dfx")
+    elbow = [j.name for j in emb.arm.joints].index("elbow_joint")
+    for side in SIDES:
+        kin = ArmKinematics(emb.arm, emb.mounts[side], emb.hand, side)
+        home = emb.arm.home_seed[side][elbow]
+        pos, quat = kin.fk(emb.arm.home_seed[side])
+        far = kin.ik(pos + np.array([0.0, 0.45, -0.1]), quat, emb.arm.home_seed[side]).q    # beyond reach: stretched
+        assert np.sign(far[elbow]) == np.sign(home) and abs(far[elbow]) >= 0.05 - 1e-12
+        assert (kin.lower[elbow] > 0) if home > 0 else (kin.upper[elbow] < 0)
+
+
 def test_compiles_and_layout(embodiment, scene):
     model, layout = scene
     emb = load_embodiment(embodiment)

@@ -22,6 +22,7 @@ SETTINGS = [
     ("fruit_bowl_loading", "ur5_rh56dfx", 0),
     ("gaming_desk_setup", "jaka_zu7_dexhand021", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
+    ("trash_disposal", "ur5_rh56dfx", 1),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
 ]
 GUARDED_ELSEWHERE = {"citrus_plate_loading"}
