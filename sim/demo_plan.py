@@ -2,7 +2,8 @@
 
 Each step is one kind from STEP_KINDS, named by the field that says what it acts on: `pick` (carry
 an object to a target), `drag` (pull a container into a zone), `pour` (tip a bottle's mouth over a
-target), `press` (press keys or buttons in order), `turn` (swing a lid or a door to a joint angle).
+target), `press` (press keys or buttons in order), `turn` (swing a lid or a door to a joint angle),
+`carry` (both hands carry an object between their palms).
 Every field is checked when the task loads, so a bad plan fails then, naming the step and the field.
 A new kind is a new entry here with its check, and a planner in teleop/plan_steps/.
 """
@@ -20,6 +21,7 @@ PLAN_GRASPS = ("power", "pinch")
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
 HANDS = ("left", "right")
+BOTH_HANDS = "both"          # `hand: both`: a step of both hands at once (kinds in BOTH_HANDS_KINDS)
 
 
 @dataclass(frozen=True)
@@ -78,14 +80,34 @@ def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
                         point)
 
 
+DRAG_HOOK_DEPTH_M = 0.02   # drag: curled fingertips this far below the container's rim
+DRAG_PITCH_DEG = 20.0      # ... the fingers tilted this far down into it
+
+
 def _check_drag(path, where: str, step: dict, scope: PlanScope) -> None:
-    """{hand, drag, to_zone, [after]}: pull a container across the table until it is over the zone."""
+    """{hand, drag, to_zone, [place_offset], [hook_depth], [pitch_deg], [hook_closure], [after]}: pull a
+    container across the table until its centre is at place_offset [dx, dy] from the zone's centre, the
+    curled fingertips hook_depth below its rim, the fingers pitch_deg down and curled hook_closure of the
+    wall hook (a tall box tips when full curl lifts its wall: pull low, barely curled)."""
     _check_object(path, where, step, "drag", scope.objects)
     if step["to_zone"] not in scope.zones:
         raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(scope.zones)}", step["to_zone"])
     if scope.objects[step["drag"]].interior_half_extents is None:
         containers = sorted(n for n, o in scope.objects.items() if o.interior_half_extents is not None)
         raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
+    offset = step.get("place_offset", [0.0, 0.0])
+    if not isinstance(offset, (list, tuple)) or len(offset) != 2 or not all(map(_is_number, offset)):
+        raise SpecError(path, f"{where}.place_offset", "[dx, dy] from the zone's centre in metres", offset)
+    depth = step.get("hook_depth", DRAG_HOOK_DEPTH_M)
+    height = 2 * scope.objects[step["drag"]].interior_half_extents[2]
+    if not _is_number(depth) or not 0.0 < depth < height:
+        raise SpecError(path, f"{where}.hook_depth", f"metres below the rim in (0, {height:.3f})", depth)
+    pitch = step.get("pitch_deg", DRAG_PITCH_DEG)
+    if not _is_number(pitch) or not 0.0 <= pitch <= 80.0:
+        raise SpecError(path, f"{where}.pitch_deg", "degrees in [0, 80]", pitch)
+    closure = step.get("hook_closure", 1.0)
+    if not _is_number(closure) or not 0.0 < closure <= 1.0:
+        raise SpecError(path, f"{where}.hook_closure", "a fraction of the wall hook's curl in (0, 1]", closure)
 
 
 def _check_press(path, where: str, step: dict, scope: PlanScope) -> None:
@@ -142,14 +164,38 @@ def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
         raise SpecError(path, f"{where}.to", f"an angle in rad within the joint range [{lo:g}, {hi:g}]", step["to"])
 
 
+BOTH_HANDS_KINDS = ("carry",)   # kinds whose step takes `hand: both`
+
+
+def _check_carry(path, where: str, step: dict, scope: PlanScope) -> None:
+    """{hand: both, carry, place, [place_offset], [grasp_height], [after]}: both palms squeeze the object
+    from opposite sides and carry it onto/into `place` (place_offset as for pick); grasp_height
+    (metres from its centre, within its half height) is where the palms press."""
+    if step["hand"] != BOTH_HANDS:
+        raise SpecError(path, f"{where}.hand", f"{BOTH_HANDS!r} (a carry takes both hands)", step["hand"])
+    _check_object(path, where, step, "carry", scope.objects)
+    others = {n: o for n, o in scope.objects.items() if n != step["carry"]}
+    _check_object(path, where, step, "place", others)
+    offset = step.get("place_offset", [0.0, 0.0])
+    if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
+        raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
+    half_z = float(scope.objects[step["carry"]].half_extents[2])
+    height = step.get("grasp_height", 0.0)
+    if not _is_number(height) or abs(height) > half_z:
+        raise SpecError(path, f"{where}.grasp_height", f"metres from the object's centre in [{-half_z:g}, {half_z:g}]",
+                        height)
+
+
 STEP_KINDS: dict[str, StepKind] = {
     "pick": StepKind(("hand", "pick", "place"),
                      ("place_offset", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "after"), _check_pick),
-    "drag": StepKind(("hand", "drag", "to_zone"), ("after",), _check_drag),
+    "drag": StepKind(("hand", "drag", "to_zone"), ("place_offset", "hook_depth", "pitch_deg", "hook_closure", "after"),
+                     _check_drag),
     "pour": StepKind(("hand", "pour", "into"), ("tilt_deg", "grasp", "approach_pitch_deg", "place_offset", "after"),
                      _check_pour),
     "press": StepKind(("hand", "press"), ("after",), _check_press),
     "turn": StepKind(("hand", "turn", "to"), ("after",), _check_turn),
+    "carry": StepKind(("hand", "carry", "place"), ("place_offset", "grasp_height", "after"), _check_carry),
 }
 PLAN_STEP = " or ".join("{" + ", ".join(k.required) + ", ...}" for k in STEP_KINDS.values())
 
@@ -178,8 +224,9 @@ def parse_plan(path, raw: dict, scope: PlanScope) -> list[dict]:
         for key in kind.required:
             if key not in step:
                 raise SpecError(path, f"{where}.{key}", "a value")
-        if step["hand"] not in HANDS:
-            raise SpecError(path, f"{where}.hand", " or ".join(map(repr, HANDS)), step["hand"])
+        hands = (*HANDS, BOTH_HANDS) if kinds[0] in BOTH_HANDS_KINDS else HANDS
+        if step["hand"] not in hands:
+            raise SpecError(path, f"{where}.hand", " or ".join(map(repr, hands)), step["hand"])
         after = step.get("after", [])
         if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < i
                                                   for j in after):

@@ -16,7 +16,7 @@ import dataclasses
 import mujoco
 import numpy as np
 
-from sim.demo_plan import step_kind
+from sim.demo_plan import BOTH_HANDS, step_kind
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
@@ -79,12 +79,16 @@ class ScriptedOperator:
                                 "home": (pos0, quat0)}
         ends: list[int] = []         # each step's last control step
         for item in scene.task.demo_plan:
-            tl = self.sides[item["hand"]]["timeline"]
+            # `hand: both` (sim/demo_plan.py BOTH_HANDS): both timelines start together, once both are free
+            tls = [s["timeline"] for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)]
             wait_until = max((ends[j] for j in item.get("after", [])), default=0)
-            if wait_until > tl.end:
-                tl.add(wait_until - tl.end)     # the hand holds still until those steps are done
+            if len(tls) > 1:
+                wait_until = max(wait_until, *(tl.end for tl in tls))
+            for tl in tls:
+                if wait_until > tl.end:
+                    tl.add(wait_until - tl.end)     # the hand holds still until those steps are done
             PLANNERS[step_kind(item)](self, data, item)
-            ends.append(tl.end)
+            ends.append(max(tl.end for tl in tls))
         for side in self.sides.values():
             side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], hand=side["open"])
         self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS

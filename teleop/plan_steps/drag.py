@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
+from sim.demo_plan import DRAG_HOOK_DEPTH_M, DRAG_PITCH_DEG
 from sim.embodiment.mirror import M
 from sim.errors import SpecError
 from sim.scene.sample import zone_centre
@@ -23,9 +24,7 @@ from teleop.plan_steps.pick_place import WALL
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
 
-DRAG_PITCH_DEG = 20.0         # fingers tilted down into the container
 DRAG_INSET_M = 0.015          # curled fingertips this far inside the leading wall
-DRAG_DEPTH_M = 0.02           # ... and this far below its rim
 DRAG_SPEED_M_PER_STEP = 0.0025  # 0.15 m/s
 
 
@@ -35,19 +34,20 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     obj = op.scene.task.objects[item["drag"]]
     body = op.scene.object_body_ids[item["drag"]]
     centre = data.xpos[body].copy()
-    way = zone_centre(op.scene.task.zones[item["to_zone"]]) - centre[:2]
+    goal = zone_centre(op.scene.task.zones[item["to_zone"]]) + np.asarray(item.get("place_offset", (0.0, 0.0)))
+    way = goal - centre[:2]
     distance = float(np.linalg.norm(way))
     if distance < 1e-6:
         return
     d = np.array([*(way / distance), 0.0])
     # fingers point at -d: PALM_DOWN's fingers (+y) turned about z
-    hand_rot = yawed(pitched_palm_down(DRAG_PITCH_DEG), np.arctan2(-d[1], -d[0]) - np.pi / 2)
-    hooked = op.power(side, WALL)
+    hand_rot = yawed(pitched_palm_down(item.get("pitch_deg", DRAG_PITCH_DEG)), np.arctan2(-d[1], -d[0]) - np.pi / 2)
+    hooked = op.power(side, np.multiply(WALL, item.get("hook_closure", 1.0)))   # 1: the full wall hook
     tips = fingertips_in_site_frame(side["hand"], hooked)[1:]        # the fingers, not the thumb
     if item["hand"] == "left":
         tips = tips @ M             # M is its own transpose: each row mirrored
     hook_tip = hand_rot @ tips.mean(axis=0)                         # curled fingertips from the site
-    target = np.array([*centre[:2], centre[2] + obj.half_extents[2] - DRAG_DEPTH_M])
+    target = np.array([*centre[:2], centre[2] + obj.half_extents[2] - item.get("hook_depth", DRAG_HOOK_DEPTH_M)])
     target += d * (wall_distance(op, data, body, target, d) - DRAG_INSET_M)
     start = target - hook_tip
     end = start + d * distance

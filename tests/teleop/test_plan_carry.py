@@ -1,0 +1,95 @@
+"""Plan step `carry` (`hand: both`): its load-time check, its keyframes and a real episode carrying
+the 1.6 kg cleaner into the wooden box with both hands."""
+
+import mujoco
+import numpy as np
+import pytest
+
+from sim import physics
+from sim.demo_plan import PlanScope, parse_plan
+from sim.errors import SpecError
+from sim.scene.builder import demonstration_scene
+from sim.scene.reach import PALM_DOWN
+from sim.tasks import load_task
+from teleop.recorder import EpisodeRecording, home
+from teleop.scripted_operator import STAGGER_STEPS, ScriptedOperator
+
+TASK, EMBODIMENT = "cleaner_box_loading", "xarm7_leap"
+STEP = {"hand": "both", "carry": "cleaner", "place": "wooden_box", "place_offset": [-0.015, 0.0, -0.12],
+        "grasp_height": 0.08}
+PALM_NORMAL = PALM_DOWN.T @ np.array([0.0, 0.0, -1.0])      # out of the palm, wrist-site frame
+CARRY_END_STEP = 560        # seed 0: lowered into the box and let go (the stage latches at 487)
+
+
+def _check(steps):
+    task = load_task(TASK)
+    return parse_plan("t.yaml", {"demo_plan": steps}, PlanScope(task.objects, task.zones, task.points))
+
+
+@pytest.mark.parametrize("fields, field", [
+    ({"hand": "left"}, "hand"),                  # a carry takes both hands
+    ({"carry": "bucket"}, "carry"),
+    ({"place": "cleaner"}, "place"),             # onto itself
+    ({"place_offset": [0.1]}, "place_offset"),
+    ({"grasp_height": 0.3}, "grasp_height"),     # above the cleaner's top
+    ({"grasp_height": "high"}, "grasp_height"),
+    ({"squeeze": 0.01}, "squeeze"),
+])
+def test_check_refuses_bad_fields(fields, field):
+    with pytest.raises(SpecError, match=rf"demo_plan\[0\]\.{field}"):
+        _check([{**STEP, **fields}])
+
+
+def test_only_a_carry_takes_both_hands():
+    with pytest.raises(SpecError, match=r"demo_plan\[0\]\.hand"):
+        _check([{"hand": "both", "pick": "soap", "place": "wooden_box"}])
+    assert _check([STEP])[0]["hand"] == "both"
+
+
+def _operator(plan):
+    scene = demonstration_scene(TASK, EMBODIMENT, 0)
+    scene.task.demo_plan[:] = _check(plan)
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    return scene, data, op
+
+
+def test_both_hands_start_together_and_squeeze_from_opposite_sides():
+    # a one-hand step first: the carry waits for both hands to be free, then keeps them in step
+    scene, data, op = _operator([{"hand": "right", "pick": "soap", "place": "table", "place_offset": [0.3, -0.2]},
+                                 STEP])
+    right, left = ([f.end_step for f in op.sides[s]["timeline"].frames] for s in ("right", "left"))
+    # the carry's 11 frames and the hold before them (the return home is the last frame)
+    assert right[-13:-1] == left[-13:-1]
+    assert left[:2] == [STAGGER_STEPS, right[-13]]        # the left held still until the right's pick ended
+    cleaner = op.object_pos(data, "cleaner")
+    squeezed = {s: op.sides[s]["timeline"].frames[-10] for s in ("right", "left")}   # approach, descend, squeeze
+    normals = {}
+    for s, frame in squeezed.items():
+        R = np.zeros(9)
+        mujoco.mju_quat2Mat(R, frame.quat)
+        normals[s] = R.reshape(3, 3) @ PALM_NORMAL
+        inwards = np.sign(cleaner[0] - frame.pos[0]) * np.array([1.0, 0.0, 0.0])
+        assert normals[s] @ inwards > 0.9                                # the palm faces the cleaner
+    assert squeezed["right"].pos[0] > cleaner[0] > squeezed["left"].pos[0]
+    assert normals["right"] @ normals["left"] < -0.9                     # the palms face each other
+    half_across = scene.task.objects["cleaner"].half_extents[0]
+    gap = abs(squeezed["right"].pos[0] - squeezed["left"].pos[0])
+    assert gap < 2 * half_across                 # aimed inside the faces: the arms press the cleaner in
+
+
+def test_both_hands_carry_the_cleaner_into_the_box():
+    scene, data, op = _operator([STEP])
+    episode = EpisodeRecording(scene, data)
+    body = scene.object_body_ids["cleaner"]
+    z0, lifted = float(data.xpos[body][2]), 0.0
+    latched = False
+    for step in range(CARRY_END_STEP):
+        action = op.act(step, data)
+        physics.step_control(scene.model, data, action)
+        record = episode.step(data, action)
+        lifted = max(lifted, float(data.xpos[body][2]) - z0)
+        latched = latched or bool(record.stage_latched[0])
+    assert lifted > 0.1               # one LEAP hand never lifted it
+    assert latched                    # inside the box and upright (cleaner_in)
