@@ -51,6 +51,7 @@ class ScriptedOperator:
         model = scene.model
         self.ctrl_home = scene.layout.home_ctrl.copy()
         self.sides = {}
+        self.link_angles: dict[str, float] = {}     # where earlier `turn` steps leave each link (planned)
         hand = load_embodiment(scene.layout.embodiment).hand
         for side, lay in scene.layout.sides.items():
             kin = scene.layout.arm_kinematics(side)

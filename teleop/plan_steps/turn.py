@@ -13,7 +13,10 @@ Everything comes from the scene: the hinge's anchor and axis (world), the link's
 against its parts find the face to push), the fingertips from the hand's kinematics; the opening
 direction is the one away from the range end nearer joint zero (the link as modelled, shut).
 A link centred on its hinge (a screen swivelling about its middle) is pushed at the free edge
-whose face looks towards the hand.
+whose face looks towards the hand. A link swinging towards the hand (a door opening outwards) is
+pulled by its handle, a bar standing off its face: the fingers come down along the hinge axis into
+the gap behind the bar and the pads draw it round; shutting it again from in front, the fingers come
+down in front of the bar the same way and push it back.
 """
 
 from __future__ import annotations
@@ -44,6 +47,8 @@ REACH_TOL_M = 0.008           # a wrist target the IK comes this close to is rea
 IK_PASSES, IK_ITERS = 3, 30   # IK solves per arc point when checking the reach (the operator's: 30 a step)
 GRAVITY_TORQUE_NM = 1e-3      # below this the link stays where it is let go (a door on a vertical hinge)
 RAY_BACKOFF_M = 0.3           # rays start this far off the link, on the pushing side
+PULL_AHEAD_M = 0.1            # a hand resting this far ahead of the face the link swings towards pulls it (below)
+UPRIGHT_AXIS_COS = 0.5        # a hinge axis within 60 degrees of vertical is upright (a door's): pulling fingers point down
 EDGE_TOL_M = 0.01             # corners of the handle part this close to its farthest reach make up a free edge
 
 
@@ -51,7 +56,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     link = Hinge(op.scene.model, data, item["turn"], op.scene.task.source)
-    start = op.__dict__.setdefault("link_angles", {}).get(item["turn"], link.angle)
+    start = op.link_angles.get(item["turn"], link.angle)
     target = float(item["to"])
     if abs(target - start) < 1e-6:
         return
@@ -62,7 +67,16 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     tip = mirror_vec(tip) if item["hand"] == "left" else tip
     n = max(1, int(np.ceil(abs(target - start) / ARC_STEP_RAD)))
     arc = np.linspace(start, target, n + 1)
-    faces = link.faces(way, start)              # contact radius -> face point (world, at ``start``)
+    # a link swinging towards the hand (a door opening outwards): reaching round behind it the arm
+    # would fold back on itself, so the fingers come down along the hinge axis behind the handle
+    # (a bar standing off the face) and the pads pull it round
+    handle = link.rotated(link.handle, start - link.angle)     # where an earlier turn left it
+    pull = float(way * link.tangent(handle) @ (side["home"][0] - handle)) > PULL_AHEAD_M
+    faces = link.faces(way, start, handle_only=pull)   # contact radius -> face point (world, at ``start``)
+    # fingers along the axis: downwards, reaching over the handle (or, the axis level, away from the hand)
+    above = link.axis @ UP if abs(link.axis @ UP) > UPRIGHT_AXIS_COS else link.axis @ (side["home"][0] - handle)
+    down = -link.axis * np.sign(above)
+    tilt_choices = TILTS_DEG[:1] if pull else TILTS_DEG     # pulling fingers lie along the axis: no tilt to try
 
     def pose(angle: float, radius: float, tilt: float, gap: float = -PUSH_DEPTH_M) -> tuple[np.ndarray, np.ndarray]:
         face = link.rotated(faces[radius], angle - start)
@@ -70,7 +84,10 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         inward = -link.radial(face)
         a = np.radians(tilt)
         z = np.cos(a) * push + np.sin(a) * inward              # fingers
-        y = inward - (inward @ z) * z if tilt > 0 else -link.axis * way   # palm towards the hinge (or along it, square)
+        if pull:
+            z, y = down, push                    # fingers down behind the handle, the pads facing the way they pull
+        else:
+            y = inward - (inward @ z) * z if tilt > 0 else -link.axis * way   # palm towards the hinge (or along it, square)
         y /= np.linalg.norm(y)
         R = np.column_stack([np.cross(y, z), y, z])
         return face - gap * push - R @ tip, R
@@ -79,12 +96,12 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     # going back (the fingertips slide in along the face and straighten up against it as it turns)
     kin, q = side["kin"], side["q"].copy()
     radii, tilts, choices = [], [], sorted(faces, reverse=True)
-    pos, R = pose(start, choices[0], TILTS_DEG[0], FACE_GAP_M)
+    pos, R = pose(start, choices[0], tilt_choices[0], FACE_GAP_M)
     q = _solve(kin, pos + APPROACH_HEIGHT_M * link.radial(faces[choices[0]]), R, q)
     for angle in arc:
         found = None
         for radius in [r for r in choices if not radii or r <= radii[-1]]:
-            for tilt in [t for t in TILTS_DEG if not tilts or t <= tilts[-1]]:
+            for tilt in [t for t in tilt_choices if not tilts or t <= tilts[-1]]:
                 pos, R = pose(angle, radius, tilt)
                 q_try = _solve(kin, pos, R, q)
                 if np.linalg.norm(kin.fk(q_try)[0] - pos) <= REACH_TOL_M:
@@ -93,11 +110,11 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
             if found:
                 break
         if found is None:           # out of reach: push on as the last reached pose did, as far as the arm goes
-            found = (radii[-1], tilts[-1]) if radii else (choices[0], TILTS_DEG[0])
+            found = (radii[-1], tilts[-1]) if radii else (choices[0], tilt_choices[0])
         radii.append(found[0])
         tilts.append(found[1])
     first = pose(start, radii[0], tilts[0], FACE_GAP_M)
-    back = link.radial(faces[radii[0]])      # in from beyond the free edge
+    back = -first[1][:, 2] if pull else link.radial(faces[radii[0]])   # in along the fingers, or from beyond the free edge
     tl.add(DURATIONS["approach"], pos=first[0] + APPROACH_HEIGHT_M * back, quat=quat(first[1]), hand=side["open"])
     tl.add(DURATIONS["descend"], pos=first[0])
     previous = (faces[radii[0]], first[0])
@@ -191,10 +208,12 @@ class Hinge:
         """Point ``p`` of the link after the joint turns by ``angle``."""
         return self.anchor + rotation(self.axis, angle) @ (p - self.anchor)
 
-    def faces(self, way: float, start: float) -> dict[float, np.ndarray]:
+    def faces(self, way: float, start: float, handle_only: bool = False) -> dict[float, np.ndarray]:
         """The link's face on the side it is pushed from, at contact radii (RADIUS_FRACTIONS of the
         handle's) along the handle's radial line and at the link angle ``start``: rays towards the
-        link against its own parts. Radii whose ray misses the link are left out."""
+        link against its own parts. Radii whose ray misses the link are left out. ``handle_only``:
+        rays against the handle alone, finding the side of a bar standing off the link that fingers
+        hooked behind it pull on."""
         turn = start - self.angle
         out = {}
         for f in RADIUS_FRACTIONS:
@@ -202,7 +221,7 @@ class Hinge:
             push = way * self.tangent(along)
             origin = along - RAY_BACKOFF_M * push
             hits = []
-            for g in self.geoms:
+            for g in [self.handle_geom] if handle_only else self.geoms:
                 d = mujoco.mju_rayGeom(self.data.geom_xpos[g], self.data.geom_xmat[g], self.model.geom_size[g],
                                        origin, push, int(self.model.geom_type[g]))
                 if d >= 0:

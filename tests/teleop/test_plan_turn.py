@@ -163,3 +163,74 @@ def test_screen_is_swivelled_straight_through_the_stream_interface(tmp_path):
         physics.step_control(scene.model, data, op.act(step, data))
         step += 1
     assert abs(data.qpos[qadr]) <= STRAIGHT_RAD, f"screen at {data.qpos[qadr]:.2f} rad"
+
+
+DOOR_TASK, DOOR_EMBODIMENT, DOOR = "microwave_bowl_loading", "ur5_schunk", "microwave/door"
+DOOR_OPEN_RAD = 1.5
+DOOR_OPENED_RAD = 1.2           # the task's door_open stage: past this
+DOOR_CLOSED_RAD = 0.05          # ... and its door_closed stage: below this
+OPEN_HELD_STEPS = 200           # the door stays open while the hand goes home and comes back (longer than that)
+# a pull handle: a bar along the door's top front standing off it on two posts, a finger's gap behind it;
+# its outer corners reach past the door's free edge, so it is the handle (the part reaching farthest out)
+HANDLE_BAR = [{"shape": "box", "size": [0.08, 0.008, 0.008], "pos": [0.42, -0.07, 0.1]},
+              {"shape": "box", "size": [0.006, 0.025, 0.008], "pos": [0.36, -0.045, 0.1]},
+              {"shape": "box", "size": [0.006, 0.025, 0.008], "pos": [0.48, -0.045, 0.1]}]
+
+
+def _door_scene(tmp_path, seed=0, close=False):
+    """The microwave, its door (opening outwards, towards the robot) given a bar handle, and a plan:
+    the right hand pulls the door open (and, with ``close``, then pushes it shut by the bar's front)."""
+    raw = yaml.safe_load(load_task(DOOR_TASK).source.read_text())
+    door = raw["objects"]["microwave"]["links"]["door"]
+    door["parts"] = door["parts"][:2] + HANDLE_BAR
+    raw["demo_plan"] = [{"hand": "right", "turn": DOOR, "to": DOOR_OPEN_RAD}]
+    if close:
+        raw["demo_plan"].append({"hand": "right", "turn": DOOR, "to": 0.0})
+    task = parse_task(raw, tmp_path / "microwave.yaml")
+    return build_scene(task, DOOR_EMBODIMENT, demonstration_sample(task, seed))
+
+
+def test_a_door_swinging_towards_the_hand_is_pulled_by_its_handle(tmp_path):
+    """Set down: the fingers point down and the pads sit in the gap between the bar and the door,
+    facing the bar. Last arc keyframe: the pads are behind the bar as it stands at the target angle."""
+    scene = _door_scene(tmp_path)
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    door = Hinge(scene.model, data, DOOR)
+    bar = door.handle_geom
+    assert scene.model.geom_size[bar][0] == pytest.approx(HANDLE_BAR[0]["size"][0]), "the bar is the handle"
+    frames = op.sides["right"]["timeline"].frames
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, frames[2].quat)
+    assert R.reshape(3, 3)[:, 2] @ np.array([0.0, 0.0, -1.0]) > 0.99, "the fingers point down"
+    # in the door's frame (y out of its front face): behind the bar, in front of the door, within the bar's length
+    local = data.xmat[door.body].reshape(3, 3).T @ (_pads(op, frames[2]) - data.xpos[door.body])
+    bar_x, bar_y = HANDLE_BAR[0]["pos"][:2]
+    half = HANDLE_BAR[0]["size"]
+    assert abs(local[0] - bar_x) < half[0], f"pads {local[0]:.3f} m along the door, the bar at {bar_x}"
+    assert bar_y + half[1] < local[1] < -0.02, f"pads {local[1]:.3f} m off the door, the bar's back at {bar_y + half[1]}"
+
+    last_arc = _pads(op, frames[-5])
+    bar_at_target = door.rotated(data.geom_xpos[bar], DOOR_OPEN_RAD - door.angle)
+    ahead = (last_arc - bar_at_target) @ door.tangent(bar_at_target)   # the bar moves along the tangent as it opens
+    assert -0.02 < ahead < 0.0, f"pads {ahead:.3f} m ahead of the bar at {DOOR_OPEN_RAD} rad, not behind it"
+
+
+def test_door_is_pulled_open_and_shut_through_the_stream_interface(tmp_path):
+    """A real episode on the operator the pipeline records with: the door opens past the task's
+    threshold and stays there after the hand has let go of it; the hand, now in front of the door
+    (on the side it swings shut towards), comes down in front of the bar and pushes it shut."""
+    scene = _door_scene(tmp_path, seed=1, close=True)
+    data = home(scene)
+    op = OPERATORS[DEFAULT_OPERATOR]()
+    op.reset(scene, data)
+    qadr = scene.model.jnt_qposadr[scene.model.joint(DOOR).id]
+    step, angles = 0, []
+    while not op.done(step):
+        physics.step_control(scene.model, data, op.act(step, data))
+        angles.append(float(data.qpos[qadr]))
+        step += 1
+    held = sum(a >= DOOR_OPENED_RAD for a in angles)
+    assert held >= OPEN_HELD_STEPS, f"the door was past {DOOR_OPENED_RAD} rad for {held} steps, at most {max(angles):.2f} rad"
+    assert data.qpos[qadr] <= DOOR_CLOSED_RAD, f"door left at {data.qpos[qadr]:.2f} rad"
