@@ -21,6 +21,7 @@ SETTINGS = [
     ("condiment_box_loading", "ur5_wuji", 0),
     ("fruit_bowl_loading", "ur5_rh56dfx", 0),
     ("gaming_desk_setup", "jaka_zu7_dexhand021", 0),
+    ("medicine_shoebox_pack", "panda_orca", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("trash_disposal", "ur5_rh56dfx", 1),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
