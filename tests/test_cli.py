@@ -3,7 +3,12 @@ import json
 from click.testing import CliRunner
 
 from b2d_cli.main import cli
+from sim.registry import names
+from sim.tasks import load_task
+
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
+# a paper task the scripted operator cannot demonstrate yet (no demo_plan)
+UNPLANNED = next(t for t in names("tasks") if not load_task(t).demo_plan)
 
 
 def test_list_json():
@@ -40,18 +45,16 @@ def test_record_replay_validate(tmp_path):
 
 
 def test_record_refuses_a_task_without_a_demonstration_plan(tmp_path):
-    result = CliRunner().invoke(cli, ["record", "--task", "trash_disposal", "--embodiment", EMBODIMENT,
+    result = CliRunner().invoke(cli, ["record", "--task", UNPLANNED, "--embodiment", EMBODIMENT,
                                       "--episodes", "1", "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert "trash_disposal.yaml: field 'demo_plan'" in result.output
+    assert f"{UNPLANNED}.yaml: field 'demo_plan'" in result.output
     assert not list(tmp_path.iterdir())
 
 
 def test_materialize_refuses_a_setting_the_operator_cannot_record(tmp_path, monkeypatch):
-    from sim.tasks import load_task
-
     monkeypatch.setenv("B2D_DATA_ROOT", str(tmp_path))
-    key = f"trash_disposal__{load_task('trash_disposal').paper_embodiment}"
+    key = f"{UNPLANNED}__{load_task(UNPLANNED).paper_embodiment}"
     result = CliRunner().invoke(cli, ["materialize", "--setting", key])
     assert result.exit_code == 2
     assert f"unknown recordable setting '{key}'" in result.output and TASK in result.output
@@ -59,9 +62,7 @@ def test_materialize_refuses_a_setting_the_operator_cannot_record(tmp_path, monk
 
 
 def test_bench_demos_lists_a_setting_without_a_plan_and_rejects_unknown_names():
-    from sim.tasks import load_task
-
-    key = f"trash_disposal__{load_task('trash_disposal').paper_embodiment}"
+    key = f"{UNPLANNED}__{load_task(UNPLANNED).paper_embodiment}"
     result = CliRunner().invoke(cli, ["bench", "demos", "--setting", key, "--episodes", "1"])
     assert result.exit_code == 0, result.output
     figures = json.loads(result.output)
