@@ -68,14 +68,20 @@ def _pads(op, frame) -> np.ndarray:
     return frame.pos + R.reshape(3, 3) @ tips
 
 
+def _planned(scene):
+    """The scene at home and a scripted operator that has planned its task's steps there."""
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    return data, op
+
+
 def test_keyframes_start_under_the_tab_and_end_at_the_target_angle(tmp_path):
     """Set down: the pads are below the tab (the part reaching farthest from the hinge), within its
     footprint, no further below its underside than the set-down gap and a pad's thickness. Last arc
     keyframe: the pads are on the lid turned to the target angle."""
     scene = _turn_only(tmp_path)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = _planned(scene)
     lid = Hinge(scene.model, data, LID)
     g = lid.handle_geom
     frames = op.sides["right"]["timeline"].frames
@@ -132,9 +138,7 @@ def test_a_link_spanning_its_hinge_is_pushed_at_the_free_edge_facing_the_hand(tm
     edge (a panel's half width out), the one whose pushed face looks towards the hand; a lid's tab,
     out on one side, keeps its centre."""
     scene = _screen_scene(tmp_path)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = _planned(scene)
     screen = Hinge(scene.model, data, SCREEN)
     hand = op.sides["left"]["home"][0]
     way = -1.0                                  # from 0.44 rad to 0
@@ -194,9 +198,7 @@ def test_a_door_swinging_towards_the_hand_is_pulled_by_its_handle(tmp_path):
     """Set down: the fingers point down and the pads sit in the gap between the bar and the door,
     facing the bar. Last arc keyframe: the pads are behind the bar as it stands at the target angle."""
     scene = _door_scene(tmp_path)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = _planned(scene)
     door = Hinge(scene.model, data, DOOR)
     bar = door.handle_geom
     assert scene.model.geom_size[bar][0] == pytest.approx(HANDLE_BAR[0]["size"][0]), "the bar is the handle"
