@@ -185,14 +185,15 @@ class _Stream:
             self.ds[index] = value
             self.length = index + 1
             return
-        if self._block is None:
+        if self._block is None or value.dtype != self.ds.dtype:   # HDF5 converts a differing dtype itself
+            self.flush()
             self._grow(index + 1)
             self._write_rows(index, np.ascontiguousarray(value).reshape(1, *self.frame_shape))
             self.length = index + 1
             return
         if self._pending and index != self.length:     # a skipped frame: the block must stay contiguous
             self.flush()
-        self._block[self._pending] = value      # converts the dtype as HDF5 would
+        self._block[self._pending] = value
         self._pending += 1
         self.length = index + 1
         if self._pending == len(self._block):

@@ -44,6 +44,11 @@ class StruckOnce(Condition):
         self.fast = self.responded = self.counted = False
         self.prev_speed = 0.0
 
+    def restart(self) -> None:
+        """No strikes yet; a visit under way now is not one (only visits that begin later count)."""
+        self.strikes = 0
+        self.counted = self.counted or self.visiting
+
     def __call__(self, s: EvalStep) -> bool:
         tool, target = s.obj(self.tool), s.obj(self.target)
         arm = rotation(tool.quat) @ self.head
@@ -88,6 +93,13 @@ class Sequence(Condition):
 
     def reset(self) -> None:
         super().reset()
+        self._start_over()
+
+    def restart(self) -> None:
+        super().restart()
+        self._start_over()
+
+    def _start_over(self) -> None:
         self.index, self.rounds, self.done = 0, 0, False
         self.armed = not self.edge
 

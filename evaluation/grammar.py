@@ -39,6 +39,13 @@ class Condition:
         for child in self.children():
             child.reset()
 
+    def restart(self) -> None:
+        """Forget what has been counted but keep what is being observed (a key held down, a visit
+        under way), so that only events beginning from the next update count: a stage's events count
+        from when its dependencies hold (evaluation/stages.py). Stateful predicates override."""
+        for child in self.children():
+            child.restart()
+
 
 PREDICATES: dict[str, Callable[[ArgReader], Condition]] = {}
 

@@ -77,6 +77,10 @@ class KeyPressedSequence(Condition):
 
     def reset(self) -> None:
         self.down = {k: False for k in self.unique}
+        self.restart()
+
+    def restart(self) -> None:
+        """The sequence starts again; a key held down now counts only once it is pressed again."""
         self.index = 0  # next expected position in self.keys
         self.pending: str | None = None  # expected key that is down, waiting for its release
         self.done = False

@@ -118,13 +118,14 @@ class StageGraph:
 
     def evaluate(self, step: EvalStep) -> dict[str, bool]:
         """Each stage predicate once, in reference order; ``step.stage_value`` is filled as we go.
-        A stage's events count from when its dependencies hold: the memory of a stateful predicate
-        (key presses, strikes, sequences) is cleared at every update before they are all latched, so a
-        button pressed while the mouse was still being carried is not the click that comes after."""
+        A stage's events count from when its dependencies hold: until they are all latched, a stateful
+        predicate (key presses, strikes, sequences) restarts at every update, forgetting what it has
+        counted but not what it observes, so a button pressed, or held, before the mouse was in place
+        is not the click that comes after (only a press that begins from the latching update on)."""
         values = step.stage_value
         for k in self.eval_order:
             if k in self._stateful and not all(step.latched[d] for d in self.depends_on[k]):
-                self.predicates[k].reset()
+                self.predicates[k].restart()
             values[k] = bool(self.predicates[k](step))
         return dict(values)
 

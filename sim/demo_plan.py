@@ -48,7 +48,7 @@ def _is_number(value) -> bool:
 
 
 def _check_object(path, where: str, step: dict, key: str, objects: dict, extra: tuple[str, ...] = ()) -> None:
-    if step[key] not in objects and step[key] not in extra:
+    if not isinstance(step[key], str) or (step[key] not in objects and step[key] not in extra):
         also = "".join(f" or {e!r}" for e in extra)
         raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}{also}", step[key])
 
@@ -90,7 +90,7 @@ def _check_drag(path, where: str, step: dict, scope: PlanScope) -> None:
     curled fingertips hook_depth below its rim, the fingers pitch_deg down and curled hook_closure of the
     wall hook (a tall box tips when full curl lifts its wall: pull low, barely curled)."""
     _check_object(path, where, step, "drag", scope.objects)
-    if step["to_zone"] not in scope.zones:
+    if not isinstance(step["to_zone"], str) or step["to_zone"] not in scope.zones:
         raise SpecError(path, f"{where}.to_zone", f"a zone from {sorted(scope.zones)}", step["to_zone"])
     if scope.objects[step["drag"]].interior_half_extents is None:
         containers = sorted(n for n, o in scope.objects.items() if o.interior_half_extents is not None)

@@ -2,13 +2,22 @@ import json
 
 from click.testing import CliRunner
 
+import pytest
+
 from b2d_cli.main import cli
 from sim.registry import names
 from sim.tasks import load_task
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
-# a paper task the scripted operator cannot demonstrate yet (no demo_plan)
-UNPLANNED = next(t for t in names("tasks") if not load_task(t).demo_plan)
+
+
+@pytest.fixture
+def unplanned() -> str:
+    """A paper task the scripted operator cannot demonstrate yet (no demo_plan)."""
+    task = next((t for t in names("tasks") if not load_task(t).demo_plan), None)
+    if task is None:
+        pytest.skip("every task has a demo_plan")
+    return task
 
 
 def test_list_json():
@@ -44,25 +53,25 @@ def test_record_replay_validate(tmp_path):
     assert runner.invoke(cli, ["validate", str(tmp_path / "junk.hdf5")]).exit_code == 1
 
 
-def test_record_refuses_a_task_without_a_demonstration_plan(tmp_path):
-    result = CliRunner().invoke(cli, ["record", "--task", UNPLANNED, "--embodiment", EMBODIMENT,
+def test_record_refuses_a_task_without_a_demonstration_plan(tmp_path, unplanned):
+    result = CliRunner().invoke(cli, ["record", "--task", unplanned, "--embodiment", EMBODIMENT,
                                       "--episodes", "1", "--out", str(tmp_path)])
     assert result.exit_code == 2
-    assert f"{UNPLANNED}.yaml: field 'demo_plan'" in result.output
+    assert f"{unplanned}.yaml: field 'demo_plan'" in result.output
     assert not list(tmp_path.iterdir())
 
 
-def test_materialize_refuses_a_setting_the_operator_cannot_record(tmp_path, monkeypatch):
+def test_materialize_refuses_a_setting_the_operator_cannot_record(tmp_path, monkeypatch, unplanned):
     monkeypatch.setenv("B2D_DATA_ROOT", str(tmp_path))
-    key = f"{UNPLANNED}__{load_task(UNPLANNED).paper_embodiment}"
+    key = f"{unplanned}__{load_task(unplanned).paper_embodiment}"
     result = CliRunner().invoke(cli, ["materialize", "--setting", key])
     assert result.exit_code == 2
     assert f"unknown recordable setting '{key}'" in result.output and TASK in result.output
     assert not list(tmp_path.iterdir())
 
 
-def test_bench_demos_lists_a_setting_without_a_plan_and_rejects_unknown_names():
-    key = f"{UNPLANNED}__{load_task(UNPLANNED).paper_embodiment}"
+def test_bench_demos_lists_a_setting_without_a_plan_and_rejects_unknown_names(unplanned):
+    key = f"{unplanned}__{load_task(unplanned).paper_embodiment}"
     result = CliRunner().invoke(cli, ["bench", "demos", "--setting", key, "--episodes", "1"])
     assert result.exit_code == 0, result.output
     figures = json.loads(result.output)

@@ -116,3 +116,21 @@ with h5py.File(sys.argv[1]) as f:
                              capture_output=True, text=True)
         hashes.add(out.stdout.strip())
     assert len(hashes) == 1
+
+
+def test_a_frame_of_another_dtype_is_converted_by_hdf5_as_for_camera_images(tmp_path):
+    """A small image stream created as uint8 and later given int64 values out of its range stores what
+    HDF5's own conversion stores (clamped), not numpy's wrap-around."""
+    first = np.zeros((64, 64), np.uint8)          # 4 kB a frame: streamed, in blocks of frames
+    later = np.full((64, 64), 300, np.int64)
+    later[0, :4] = [-1, 2, 255, 256]
+    with EpisodeWriter(tmp_path / "e.h5", {}) as w:
+        for value in (first, later, first):
+            w.append({"mask": value})
+    with h5py.File(tmp_path / "direct.h5", "w") as f:
+        f.create_dataset("mask", data=np.zeros((1, 64, 64), np.uint8))[0] = later
+        expected = f["mask"][0]
+    with h5py.File(tmp_path / "e.h5") as f:
+        np.testing.assert_array_equal(f["mask"][1], expected)
+        assert f["mask"][1, 0, :4].tolist() == [0, 2, 255, 255]
+

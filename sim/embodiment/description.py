@@ -165,6 +165,9 @@ class LinkSpec:
     finger: str | None = None
 
 
+KEEP_SIGN_MARGIN_RAD = 0.05   # `ik_keep_sign`: the IK keeps the joint this far from zero (a straight elbow)
+
+
 @dataclass(frozen=True)
 class ArmDescription:
     name: str
@@ -665,8 +668,8 @@ def _keep_sign(data: dict, ctx: _Ctx, joint_names: list[str], seed: dict[str, np
         c = ctx.sub(f"ik_keep_sign[{i}]")
         if n not in joint_names:
             c.fail(f"{n!r} is not a joint; expected one of {joint_names}")
-        if any(abs(seed[s][joint_names.index(n)]) < 1e-3 for s in seed):
-            c.fail(f"{n!r} is zero in a home seed: it has no sign to keep")
+        if any(abs(seed[s][joint_names.index(n)]) <= KEEP_SIGN_MARGIN_RAD for s in seed):
+            c.fail(f"{n!r} is within {KEEP_SIGN_MARGIN_RAD} rad of zero in a home seed: no clear sign to keep")
     return tuple(str(n) for n in names)
 
 

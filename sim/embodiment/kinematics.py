@@ -14,12 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .description import ArmDescription, HandDescription, Transform, mat_to_quat, quat_to_mat
+from .description import KEEP_SIGN_MARGIN_RAD, ArmDescription, HandDescription, Transform, mat_to_quat, quat_to_mat
 from .mirror import side_links, side_transform
 
 POS_TOL_M = 2e-3
 ROT_TOL_RAD = math.radians(2.0)
-KEEP_SIGN_MARGIN_RAD = 0.05   # an `ik_keep_sign` joint stays this far from zero (a straight elbow)
 
 
 def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -109,12 +108,14 @@ class ArmKinematics:
         self.lower = model.lowerPositionLimit.copy()
         self.upper = model.upperPositionLimit.copy()
         self.joint_names = [j.name for j in arm.joints]
-        for name in arm.ik_keep_sign:       # the IK stays on the home seed's branch of these joints
+        # the IK's bounds: the joint limits, narrowed to the home seed's branch of `ik_keep_sign` joints
+        self.ik_lower, self.ik_upper = self.lower.copy(), self.upper.copy()
+        for name in arm.ik_keep_sign:
             k = self.joint_names.index(name)
             if arm.home_seed[side][k] > 0:
-                self.lower[k] = max(self.lower[k], KEEP_SIGN_MARGIN_RAD)
+                self.ik_lower[k] = max(self.ik_lower[k], KEEP_SIGN_MARGIN_RAD)
             else:
-                self.upper[k] = min(self.upper[k], -KEEP_SIGN_MARGIN_RAD)
+                self.ik_upper[k] = min(self.ik_upper[k], -KEEP_SIGN_MARGIN_RAD)
 
     @property
     def nq(self) -> int:
@@ -134,11 +135,12 @@ class ArmKinematics:
 
     def ik(self, target_pos, target_quat_wxyz, q_init, max_iters: int = 200,
            damping: float = 1e-3, pos_tol: float = 1e-5, rot_tol: float = 1e-5) -> IKResult:
-        """Damped least squares CLIK on the wrist site; joints clipped to their limits each step.
+        """Damped least squares CLIK on the wrist site; joints clipped to their limits (and the arm's
+        `ik_keep_sign` branches) each step.
         Iterates to a tight tolerance; ``success`` means within 2 mm and 2 degrees."""
         target = pin.SE3(quat_to_mat(np.asarray(target_quat_wxyz, float) / np.linalg.norm(target_quat_wxyz)),
                          np.asarray(target_pos, float))
-        q = np.clip(np.asarray(q_init, float).copy(), self.lower, self.upper)
+        q = np.clip(np.asarray(q_init, float).copy(), self.ik_lower, self.ik_upper)
         it = 0
         pe = re = float("inf")
         for it in range(1, max_iters + 1):
@@ -155,7 +157,7 @@ class ArmKinematics:
             n = np.linalg.norm(dq)
             if n > 0.5:
                 dq *= 0.5 / n
-            q = np.clip(q + dq, self.lower, self.upper)
+            q = np.clip(q + dq, self.ik_lower, self.ik_upper)
         T = self.fk_se3(q)
         pe = float(np.linalg.norm(target.translation - T.translation))
         re = float(np.linalg.norm(pin.log3(target.rotation @ T.rotation.T)))

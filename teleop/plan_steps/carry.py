@@ -111,12 +111,10 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         carry = len(tl.frames)
         over = place + held
         tl.add(CARRY_STEPS, pos=np.array([*over[:2], lifted[2]]))
-        first = len(tl.frames)
         tl.add(DURATIONS["lower"], pos=over)
         tl.add(DURATIONS["open"], hand=side["open"])
         tl.add(SQUEEZE_STEPS, pos=over + out * (SQUEEZE_M + SPREAD_M))
         tl.add(DURATIONS["retreat"], pos=over + out * (SQUEEZE_M + SPREAD_M) + APPROACH_HEIGHT_M * UP)
         op.look_again(side, item["place"], data, carry, len(tl.frames))
-        # above the target each hand looks where the object sits against it and corrects the rest of the
-        # step for it (as pick does): both see the same slip, so they move together
-        side["corrections"].append((tl.frames[first - 1].end_step, name, held, slice(first, len(tl.frames))))
+        # no slip correction before lowering (pick makes one): each palm rests about SQUEEZE_M outside
+        # the target it is aimed at, so a correction would read that as slip and open the squeeze

@@ -133,11 +133,10 @@ def grasp_and_lift(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: 
             half_z = float(np.abs(body_rot.T @ hand_rot[:, 1]) @ obj.half_extents)
         at = body_rot @ grasp_point(item)
         # the palm clears the object's top, measured from the grasped point rather than its centre
-        offset = hand_rot @ np.array([cx, max(cy, half_z - at[2] + PALM_CLEARANCE_M), cz])
+        # the hand closes on the grasp point; the object's centre sits `at` back from it
+        offset = hand_rot @ np.array([cx, max(cy, half_z - at[2] + PALM_CLEARANCE_M), cz]) - at
         closing = [(DURATIONS["close"], op.power(side, WALL)), (DURATIONS["close_late"], op.power(side, CLOSED))]
         ready = open_
-    if not pinch:
-        offset = offset - at        # the hand closes on the grasp point; this is where the centre sits
     grasp = op.object_pos(data, name) - offset
     reach = len(tl.frames)
     tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)

@@ -53,17 +53,18 @@ def test_a_bad_ik_keep_sign_names_file_and_field(tmp_path, monkeypatch, bad, wor
 
 
 def test_ur5_ik_keeps_the_elbow_on_its_home_side():
-    """A UR5 stretched nearly straight (a lid pushed open, a bin reached over) is solved on the home
-    seed's elbow branch: the IK's elbow limit stops short of zero on that side, for both arms."""
+    """A UR5 stretched straight out (a lid pushed open, a bin reached over) is solved on the home seed's
+    elbow branch: the IK stops the elbow 0.05 rad short of straight, on that side, for both arms (it
+    would straighten to 0.07 rad, from where a flip is one step away); the joint limits stay as they are."""
     emb = load_embodiment("ur5_rh56dfx")
     elbow = [j.name for j in emb.arm.joints].index("elbow_joint")
     for side in SIDES:
         kin = ArmKinematics(emb.arm, emb.mounts[side], emb.hand, side)
-        home = emb.arm.home_seed[side][elbow]
-        pos, quat = kin.fk(emb.arm.home_seed[side])
-        far = kin.ik(pos + np.array([0.0, 0.45, -0.1]), quat, emb.arm.home_seed[side]).q    # beyond reach: stretched
-        assert np.sign(far[elbow]) == np.sign(home) and abs(far[elbow]) >= 0.05 - 1e-12
-        assert (kin.lower[elbow] > 0) if home > 0 else (kin.upper[elbow] < 0)
+        home = emb.arm.home_seed[side]
+        pos, quat = kin.fk(home)
+        far = kin.ik(pos + np.array([0.0, 0.6, 0.0]), quat, home).q     # beyond reach: stretched straight
+        assert far[elbow] == pytest.approx(np.sign(home[elbow]) * description.KEEP_SIGN_MARGIN_RAD)
+        assert (kin.lower[elbow], kin.upper[elbow]) == pytest.approx((-np.pi, np.pi), abs=1e-3)
 
 
 def test_compiles_and_layout(embodiment, scene):

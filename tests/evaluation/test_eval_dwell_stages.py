@@ -159,3 +159,16 @@ def test_presses_before_a_stage_s_dependencies_hold_do_not_count():
     _, t = evaluate_states(spec, context(), states, 0.1)
     assert t["stage_latched"][:, 0].tolist() == [False, False, False, True, True, True, True]
     assert t["stage_latched"][:, 1].tolist() == [False] * 6 + [True]
+
+
+def test_a_key_held_down_while_a_stage_s_dependencies_latch_counts_only_when_pressed_again():
+    click = {"key_pressed_sequence": {"keys": ["piano/C4"], "press_threshold": 0.02}}
+    spec = {"terminal": DOOR_OPEN, "stages": [
+        {"id": "open", "predicate": DOOR_OPEN},
+        {"id": "click", "predicate": click, "depends_on": ["open"]}]}
+    # pressed while shut, held as the door opens, released; then pressed and released again
+    frames = [(0.0, 0.03), (1.2, 0.03), (1.2, 0.03), (1.2, 0.0), (1.2, 0.03), (1.2, 0.0)]
+    states = [scene({"fridge": FRIDGE, "piano": resting("piano")}, joints={"fridge/door": d, "piano/C4": c})
+              for d, c in frames]
+    _, t = evaluate_states(spec, context(), states, 0.1)
+    assert t["stage_latched"][:, 1].tolist() == [False] * 5 + [True]

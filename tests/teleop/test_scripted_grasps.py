@@ -235,3 +235,12 @@ def test_a_carried_object_clears_its_targets_top_before_it_moves_across():
             assert bottom >= top + CARRY_CLEARANCE_M - 1e-9, (name, bottom, top)
             checked += 1
     assert checked == len(picks)
+
+
+@pytest.mark.parametrize("field, bad", [("pick", ["apple_1"]), ("to_zone", {"center": 1})])
+def test_a_plan_name_of_the_wrong_kind_is_named_not_a_type_error(tmp_path, field, bad):
+    raw = yaml.safe_load(load_task("fruit_bowl_loading").source.read_text())
+    step = 0 if field == "to_zone" else 1
+    raw["demo_plan"][step][field] = bad
+    with pytest.raises(SpecError, match=rf"bowl.yaml: field 'demo_plan\[{step}\].{field}'"):
+        parse_task(raw, tmp_path / "bowl.yaml")
