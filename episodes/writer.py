@@ -155,72 +155,33 @@ class EpisodeWriter:
 
 
 class _Stream:
-    """A per-frame dataset written a few frames at a time: grown `GROW` frames at a time and trimmed on
-    closing, each block of frames written to its rows by a hyperslab selection. h5py's `resize` +
-    `ds[i] = value` cost ~0.2 ms per dataset and frame, a third of a paper frame's write over its ~56
-    image datasets; small images (tactile maps) are also held back until `BLOCK_BYTES` of them are
-    ready, since each HDF5 write call costs ~0.08 ms however small it is (60 tactile datasets: 5.8 ms
-    -> 2.3 ms a frame)."""
+    """A per-frame dataset written one frame at a time: grown `GROW` frames at a time and trimmed on
+    closing, each frame written to its row by a hyperslab selection. h5py's `resize` + `ds[i] = value`
+    cost ~0.2 ms per dataset and frame, a third of a paper frame's write over its ~56 image datasets."""
 
     GROW = 64
-    BLOCK_BYTES = 512 * 1024    # per dataset: at most ~30 MB held for a paper frame's 60 tactile maps
-    MAX_BLOCK_FRAMES = 8
 
     def __init__(self, ds: h5py.Dataset):
         self.ds = ds
         self.frame_shape = ds.shape[1:]
         self.capacity = ds.shape[0]
         self.length = 0            # last written frame + 1: the dataset's length when closed
-        frame_bytes = max(1, int(np.prod(self.frame_shape)) * ds.dtype.itemsize)
-        frames = min(self.MAX_BLOCK_FRAMES, self.BLOCK_BYTES // frame_bytes)
-        # camera images go straight from the caller's array: copying 24 MB a paper frame costs more
-        self._block = np.empty((frames, *self.frame_shape), ds.dtype) if frames > 1 else None
-        self._pending = 0          # frames held in the block, for rows length - pending .. length - 1
+        self._memory = h5py.h5s.create_simple((1, *self.frame_shape))
         self._start = (0,) * len(self.frame_shape)
 
     def write(self, index: int, value: np.ndarray) -> None:
-        if value.shape != self.frame_shape:     # broadcast (or fail) as h5py does
-            self.flush()
-            self._grow(index + 1)
-            self.ds[index] = value
-            self.length = index + 1
-            return
-        if self._block is None or value.dtype != self.ds.dtype:   # HDF5 converts a differing dtype itself
-            self.flush()
-            self._grow(index + 1)
-            self._write_rows(index, np.ascontiguousarray(value).reshape(1, *self.frame_shape))
-            self.length = index + 1
-            return
-        if self._pending and index != self.length:     # a skipped frame: the block must stay contiguous
-            self.flush()
-        self._block[self._pending] = value
-        self._pending += 1
-        self.length = index + 1
-        if self._pending == len(self._block):
-            self.flush()
-
-    def flush(self) -> None:
-        """Write the held frames to their rows."""
-        if not self._pending:
-            return
-        self._grow(self.length)
-        self._write_rows(self.length - self._pending, self._block[:self._pending])
-        self._pending = 0
-
-    def _write_rows(self, first: int, rows: np.ndarray) -> None:
-        """Write ``rows`` [n, *frame_shape] to rows first .. first + n - 1 (HDF5 converts the dtype
-        if it differs, as h5py's ds[i] = value does)."""
-        selection = self.ds.id.get_space()
-        selection.select_hyperslab((first, *self._start), rows.shape)
-        self.ds.id.write(h5py.h5s.create_simple(rows.shape), selection, rows)
-
-    def _grow(self, length: int) -> None:
-        if length > self.capacity:
-            self.capacity = length + self.GROW
+        if index >= self.capacity:
+            self.capacity = index + self.GROW
             self.ds.resize(self.capacity, axis=0)
+        if value.shape != self.frame_shape:     # broadcast (or fail) as h5py does
+            self.ds[index] = value
+        else:   # HDF5 converts the dtype if it differs, as h5py's ds[index] = value does
+            row = self.ds.id.get_space()
+            row.select_hyperslab((index, *self._start), (1, *self.frame_shape))
+            self.ds.id.write(self._memory, row, np.ascontiguousarray(value).reshape(1, *self.frame_shape))
+        self.length = index + 1
 
     def trim(self) -> None:
-        self.flush()
         if self.capacity != self.length:
             self.ds.resize(self.length, axis=0)
             self.capacity = self.length
