@@ -53,6 +53,22 @@ def _check_object(path, where: str, step: dict, key: str, objects: dict, extra: 
         raise SpecError(path, f"{where}.{key}", f"an object from {sorted(objects)}{also}", step[key])
 
 
+def _check_vector(path, where: str, step: dict, key: str, lengths: tuple[int, ...], expected: str) -> None:
+    """An optional field of numbers, ``lengths`` long (absent: fine)."""
+    if key not in step:
+        return
+    value = step[key]
+    if not isinstance(value, (list, tuple)) or len(value) not in lengths or not all(map(_is_number, value)):
+        raise SpecError(path, f"{where}.{key}", expected, value)
+
+
+def _check_approach_pitch(path, where: str, step: dict) -> None:
+    lo, hi = APPROACH_PITCH_RANGE_DEG
+    pitch = step.get("approach_pitch_deg", 0.0)
+    if not _is_number(pitch) or not lo <= pitch <= hi:
+        raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
+
+
 def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
     [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
@@ -60,24 +76,17 @@ def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
     narrow side); grasp_point is where a power grasp closes, in the object's frame."""
     _check_object(path, where, step, "pick", scope.objects)
     _check_object(path, where, step, "place", scope.objects, extra=(TABLE_TARGET,))
-    offset = step.get("place_offset", [0.0, 0.0])
-    if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
-        raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
+    _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
     if step.get("grasp", "power") not in PLAN_GRASPS:
         raise SpecError(path, f"{where}.grasp", f"one of {list(PLAN_GRASPS)}", step["grasp"])
-    lo, hi = APPROACH_PITCH_RANGE_DEG
-    pitch = step.get("approach_pitch_deg", 0.0)
-    if not _is_number(pitch) or not lo <= pitch <= hi:
-        raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
+    _check_approach_pitch(path, where, step)
     yaw = step.get("grasp_yaw", 0.0)
     if yaw != GRASP_YAW_ACROSS and not (_is_number(yaw) and -180.0 <= yaw <= 180.0):
         raise SpecError(path, f"{where}.grasp_yaw", f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]", yaw)
-    point = step.get("grasp_point", [0.0, 0.0, 0.0])
-    if not isinstance(point, (list, tuple)) or len(point) != 3 or not all(map(_is_number, point)):
-        raise SpecError(path, f"{where}.grasp_point", "[x, y, z] in the object's frame, metres", point)
+    _check_vector(path, where, step, "grasp_point", (3,), "[x, y, z] in the object's frame, metres")
     if "grasp_point" in step and step.get("grasp", "power") == "pinch":
         raise SpecError(path, f"{where}.grasp_point", "no grasp_point with grasp: pinch (the pinch finds its own)",
-                        point)
+                        step["grasp_point"])
 
 
 DRAG_HOOK_DEPTH_M = 0.02   # drag: curled fingertips this far below the container's rim
@@ -95,9 +104,7 @@ def _check_drag(path, where: str, step: dict, scope: PlanScope) -> None:
     if scope.objects[step["drag"]].interior_half_extents is None:
         containers = sorted(n for n, o in scope.objects.items() if o.interior_half_extents is not None)
         raise SpecError(path, f"{where}.drag", f"a container from {containers}", step["drag"])
-    offset = step.get("place_offset", [0.0, 0.0])
-    if not isinstance(offset, (list, tuple)) or len(offset) != 2 or not all(map(_is_number, offset)):
-        raise SpecError(path, f"{where}.place_offset", "[dx, dy] from the zone's centre in metres", offset)
+    _check_vector(path, where, step, "place_offset", (2,), "[dx, dy] from the zone's centre in metres")
     depth = step.get("hook_depth", DRAG_HOOK_DEPTH_M)
     height = 2 * scope.objects[step["drag"]].interior_half_extents[2]
     if not _is_number(depth) or not 0.0 < depth < height:
@@ -140,16 +147,10 @@ def _check_pour(path, where: str, step: dict, scope: PlanScope) -> None:
     tilt = step.get("tilt_deg", POUR_DEFAULT_TILT_DEG)
     if not _is_number(tilt) or not lo <= tilt <= hi:
         raise SpecError(path, f"{where}.tilt_deg", f"degrees in [{lo:g}, {hi:g}]", tilt)
-    if "place_offset" in step:
-        offset = step["place_offset"]
-        if not isinstance(offset, (list, tuple)) or len(offset) != 2 or not all(map(_is_number, offset)):
-            raise SpecError(path, f"{where}.place_offset", "[x, y] of the table top in metres", offset)
+    _check_vector(path, where, step, "place_offset", (2,), "[x, y] of the table top in metres")
     if step.get("grasp", POUR_DEFAULT_GRASP) not in POUR_GRASPS:
         raise SpecError(path, f"{where}.grasp", f"one of {list(POUR_GRASPS)}", step["grasp"])
-    lo, hi = APPROACH_PITCH_RANGE_DEG
-    pitch = step.get("approach_pitch_deg", 0.0)
-    if not _is_number(pitch) or not lo <= pitch <= hi:
-        raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
+    _check_approach_pitch(path, where, step)
 
 
 def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
@@ -176,9 +177,7 @@ def _check_carry(path, where: str, step: dict, scope: PlanScope) -> None:
     _check_object(path, where, step, "carry", scope.objects)
     others = {n: o for n, o in scope.objects.items() if n != step["carry"]}
     _check_object(path, where, step, "place", others)
-    offset = step.get("place_offset", [0.0, 0.0])
-    if not isinstance(offset, (list, tuple)) or len(offset) not in (2, 3) or not all(map(_is_number, offset)):
-        raise SpecError(path, f"{where}.place_offset", "[dx, dy] or [dx, dy, dz] in metres", offset)
+    _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
     half_z = float(scope.objects[step["carry"]].half_extents[2])
     height = step.get("grasp_height", 0.0)
     if not _is_number(height) or abs(height) > half_z:

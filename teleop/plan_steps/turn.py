@@ -28,7 +28,7 @@ import numpy as np
 
 from sim.embodiment.mirror import mirror_vec
 from sim.errors import SpecError
-from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, quat
+from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, axis_rotation, quat
 from teleop.pinch_grasp import fingertips_in_site_frame
 
 if TYPE_CHECKING:
@@ -139,14 +139,6 @@ def _solve(kin, pos: np.ndarray, R: np.ndarray, q: np.ndarray) -> np.ndarray:
     return q
 
 
-def rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    q = np.zeros(4)
-    mujoco.mju_axisAngle2Quat(q, axis, angle)
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, q)
-    return R.reshape(3, 3)
-
-
 class Hinge:
     """A hinged link as the scene has it now: anchor and axis (world), angle, range, and its handle
     (the part reaching farthest from the hinge)."""
@@ -206,7 +198,7 @@ class Hinge:
 
     def rotated(self, p: np.ndarray, angle: float) -> np.ndarray:
         """Point ``p`` of the link after the joint turns by ``angle``."""
-        return self.anchor + rotation(self.axis, angle) @ (p - self.anchor)
+        return self.anchor + axis_rotation(self.axis, angle) @ (p - self.anchor)
 
     def faces(self, way: float, start: float, handle_only: bool = False) -> dict[float, np.ndarray]:
         """The link's face on the side it is pushed from, at contact radii (RADIUS_FRACTIONS of the
