@@ -56,6 +56,8 @@ class EpisodeWriter:
         # small per-frame values (boxes, poses, flags, error text) are kept in memory and written once
         # at the end: appending to ~150 tiny datasets cost ~0.1 ms each per frame in HDF5 calls
         self._small: dict[str, list[tuple[int, object]]] = {}
+        # per key, from its first frame: its row shape (None: text) and whether it is buffered
+        self._layout: dict[str, tuple[tuple | None, bool]] = {}
 
     def __enter__(self) -> "EpisodeWriter":
         tmp = self._atomic.__enter__()
@@ -79,10 +81,10 @@ class EpisodeWriter:
             self._file.create_dataset(key, data=value, **packed)
 
     def append(self, frame: dict) -> None:
-        for key, value in frame.items():
-            if not isinstance(value, str):
-                value = np.asarray(value)
-            if isinstance(value, str) or value.nbytes < SMALL_FRAME_BYTES:
+        values = {key: value if isinstance(value, str) else np.asarray(value) for key, value in frame.items()}
+        buffered = {key: self._buffered(key, value) for key, value in values.items()}   # checks all first
+        for key, value in values.items():
+            if buffered[key]:
                 # a copy: callers pass views into MjData that change with the next step
                 self._small.setdefault(key, []).append((self._count, value if isinstance(value, str) else value.copy()))
                 continue
@@ -91,6 +93,20 @@ class EpisodeWriter:
                 stream = self._datasets[key] = _Stream(self._create(key, value))
             stream.write(self._count, value)
         self._count += 1
+
+    def _buffered(self, key: str, value) -> bool:
+        """Whether ``key``'s frames are kept in memory until close (decided by its first frame's size).
+        Every frame of a key has its first frame's shape (text stays text): a dataset has one row shape."""
+        shape = None if isinstance(value, str) else value.shape
+        if key not in self._layout:
+            self._layout[key] = (shape, shape is None or value.nbytes < SMALL_FRAME_BYTES)
+        first, buffered = self._layout[key]
+        if shape != first:
+            expected = "text" if first is None else f"shape {first}"
+            got = "text" if shape is None else f"shape {shape}"
+            raise ValueError(f"{self.path}: frame {self._count} of '{key}': expected {expected} as in its first "
+                             f"frame, got {got}")
+        return buffered
 
     def _create(self, key: str, value: np.ndarray) -> h5py.Dataset:
         image_like = value.ndim >= 2 and value.size >= 1024
@@ -130,6 +146,7 @@ class EpisodeWriter:
         """Datasets known only at the end (episode metrics, success flags)."""
         self._datasets.pop(key, None)
         self._small.pop(key, None)
+        self._layout.pop(key, None)
         if key in self._file:
             del self._file[key]
         self._write_static(key, value)

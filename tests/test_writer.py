@@ -35,6 +35,22 @@ def test_a_failed_episode_leaves_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("first, later", [(np.zeros(3), np.zeros(2000)),        # small, then large
+                                           (np.zeros((40, 40)), np.zeros((40, 41))),
+                                           ("text", np.zeros(3))])
+def test_a_frame_of_another_shape_is_refused_whole_and_names_the_key(tmp_path, first, later):
+    path = tmp_path / "e.h5"
+    with EpisodeWriter(path, {}) as w:
+        w.append({"kept": np.float64(0), "changing": first})
+        with pytest.raises(ValueError) as err:
+            w.append({"kept": np.float64(1), "changing": later})
+        w.append({"kept": np.float64(2), "changing": first})
+    message = str(err.value)
+    assert "e.h5" in message and "frame 1 of 'changing'" in message and "as in its first frame" in message
+    with h5py.File(path) as f:         # nothing of the refused frame was written
+        assert f["kept"][()].tolist() == [0.0, 2.0] and len(f["changing"]) == 2
+
+
 def _pipeline(ds: h5py.Dataset) -> list[int]:
     dcpl = ds.id.get_create_plist()
     return [dcpl.get_filter(i)[0] for i in range(dcpl.get_nfilters())]
