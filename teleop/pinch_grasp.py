@@ -67,7 +67,7 @@ def pinch_grasp(hand_name: str) -> PinchGrasp:
 def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
     """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
     sample (one start gets caught in local minima on the hands with little thumb opposition)."""
-    kin = _kinematics(hand_name)
+    kin = hand_kinematics(hand_name)
     thumb, tips = _fingertip_rows(kin, fingers)
     # actuators that move a pinching pad or the thumb pad solve; the rest fold away
     moving = np.zeros(kin.dof, bool)
@@ -109,7 +109,8 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
 
 
 @functools.lru_cache(maxsize=None)
-def _kinematics(hand_name: str) -> HandKinematics:
+def hand_kinematics(hand_name: str) -> HandKinematics:
+    """The hand's own kinematic model (teleop/retarget), built once per hand."""
     return HandKinematics(hand_name)
 
 
@@ -118,7 +119,7 @@ def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m
     closed as possible while the thumb pad stays ``width_m`` from every pinching pad, and the point
     midway between the thumb pad and the pinching pads there (wrist-site frame, right hand), where
     the object's centre goes so that both sides close in on it together."""
-    kin = _kinematics(hand_name)
+    kin = hand_kinematics(hand_name)
     thumb, tips = _fingertip_rows(kin, pinch_grasp(hand_name).fingers)
     for s in np.linspace(1.0, 0.0, 21):      # ends at s = 0, the open hand, if nothing is wide enough
         q = open_ + s * (close - open_)
@@ -132,7 +133,7 @@ def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m
 def fingertips_in_site_frame(hand_name: str, q: np.ndarray) -> np.ndarray:
     """(fingers, 3) fingertip pad points of the right hand at actuator targets ``q``, in the
     wrist-site frame (x lateral, y palm normal, z along the fingers)."""
-    kin = _kinematics(hand_name)
+    kin = hand_kinematics(hand_name)
     return kin.hand.wrist_site.to_local(kin.points(q)[1:])
 
 
@@ -141,7 +142,7 @@ def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
     """Unit vector from the thumb pad to the pinching pads (right hand, wrist-site frame), with the
     hand half closed: the direction across which a pinched object must fit."""
     grasp = pinch_grasp(hand_name)
-    kin = _kinematics(hand_name)
+    kin = hand_kinematics(hand_name)
     thumb, tips = _fingertip_rows(kin, grasp.fingers)
     P = fingertips_in_site_frame(hand_name, 0.5 * (kin.home + grasp.close))
     axis = P[[t - 1 for t in tips]].mean(axis=0) - P[thumb - 1]    # rows of P: fingertips only

@@ -20,9 +20,10 @@ from sim.demo_plan import BOTH_HANDS, step_kind
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
-from teleop.operator_motion import DURATIONS, SideTimeline
+from teleop.operator_motion import DURATIONS, SideTimeline, axis_rotation
 from teleop.pinch_grasp import pinch_grasp
 from teleop.plan_steps import PLANNERS
+from teleop.transit import hand_outline, object_corners, obstacles, transit_height
 
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
 MAX_SLIP_M = 0.06             # a larger offset means the object is not in the hand at all
@@ -43,6 +44,17 @@ def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
     return dataclasses.replace(grasp, centre=mirror_vec(grasp.centre)) if side == "left" else grasp
 
 
+def step_objects(item: dict) -> set[str]:
+    """The objects a plan step names (what it picks, places on, drags, pours, presses: "<object>/<link>"
+    names its object)."""
+    names = set()
+    for value in item.values():
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, str):
+                names.add(v.split("/")[0])
+    return names
+
+
 class ScriptedOperator:
     name = "scripted"
 
@@ -52,6 +64,8 @@ class ScriptedOperator:
         self.ctrl_home = scene.layout.home_ctrl.copy()
         self.sides = {}
         self.link_angles: dict[str, float] = {}     # where earlier `turn` steps leave each link (planned)
+        self.planned_pos: dict[str, np.ndarray] = {}  # where earlier steps leave the objects they move (planned)
+        self.planned_on: dict[str, str] = {}     # ... and the object they leave each on or in
         hand = load_embodiment(scene.layout.embodiment).hand
         for side, lay in scene.layout.sides.items():
             kin = scene.layout.arm_kinematics(side)
@@ -77,7 +91,7 @@ class ScriptedOperator:
                                 "pinch_close": np.clip(pinch.close, lo, hi), "hand": hand.name,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
                                 "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, open_, start),
-                                "home": (pos0, quat0)}
+                                "home": (pos0, quat0), "name": side}
         ends: list[int] = []         # each step's last control step
         for item in scene.task.demo_plan:
             # `hand: both` (sim/demo_plan.py BOTH_HANDS): both timelines start together, once both are free
@@ -97,6 +111,47 @@ class ScriptedOperator:
     def object_pos(self, data, name) -> np.ndarray:
         """Where object ``name`` is now (world)."""
         return data.xpos[self.scene.object_body_ids[name]].copy()
+
+    def set_off(self, side: dict, data: mujoco.MjData, item: dict, duration: int, pos, quat=None, hand=None,
+                carried: tuple[str, np.ndarray] | None = None) -> None:
+        """Move the hand from its last keyframe to ``pos`` (``quat``, ``hand``) in ``duration`` steps,
+        as ``SideTimeline.add``; when the straight move would pass too low over an object (at the place
+        an earlier step left it), first rise to a transit height, move across there, then come down
+        (teleop/transit.py). ``carried``: the object held (its centre's offset from the wrist, world),
+        which must clear them too. The step's own objects (what it grasps, targets, carries) are not
+        in the way: the hand comes down to them."""
+        tl: SideTimeline = side["timeline"]
+        last = tl.frames[-1]
+        quat = last.quat if quat is None else np.asarray(quat, float)
+        hand = last.hand if hand is None else np.asarray(hand, float)
+        mine = step_objects(item)
+        ids = self.scene.object_body_ids
+        if carried is not None:
+            mine.add(carried[0])
+        # what earlier steps put into or onto the step's target is part of what the hand comes down to
+        mine |= {n for n, on in self.planned_on.items() if on in mine}
+        model, turned = self.scene.model, {}
+        for link, angle in self.link_angles.items():       # links earlier `turn` steps swing round
+            j = model.joint(link).id
+            turned[int(model.jnt_bodyid[j])] = (data.xanchor[j].copy(), axis_rotation(
+                data.xaxis[j], angle - float(data.qpos[model.jnt_qposadr[j]])))
+        in_way = [ob for n, b in ids.items() if n not in mine
+                  for ob in obstacles(model, data, n, b, self.planned_pos.get(n, data.xpos[b]) - data.xpos[b], turned)]
+        points = None
+        if carried is not None:
+            name, offset = carried
+            points = object_corners(self.scene.model, data, ids[name]) - data.xpos[ids[name]] + offset
+        outline = hand_outline(side["hand"], side["name"], last.hand, hand)
+        height = transit_height(last.pos, last.quat, np.asarray(pos, float), quat, outline, points, in_way)
+        if height is None:
+            tl.add(duration, pos=pos, quat=quat, hand=hand)
+            return
+        height = max(height, last.pos[2], float(pos[2]))
+        if height > last.pos[2]:
+            tl.add(DURATIONS["lift"], pos=np.array([*last.pos[:2], height]))
+        tl.add(duration, pos=np.array([pos[0], pos[1], height]), quat=quat, hand=hand)
+        if height > pos[2]:
+            tl.add(DURATIONS["descend"], pos=pos)
 
     def look_again(self, side: dict, name: str, data, first: int, end: int) -> None:
         """When the hand sets off towards ``name`` (the start of frame ``first``), the operator looks

@@ -132,6 +132,24 @@ class GeomSpec:
     rgba: tuple[float, float, float, float] | None = None
     name: str | None = None
 
+    def support(self, u: np.ndarray) -> np.ndarray:
+        """The point of the geom (link frame) furthest along unit ``u`` (link frame)."""
+        if self.type in ("capsule", "cylinder"):
+            if self.fromto is not None:
+                a, b = np.asarray(self.fromto[:3], float), np.asarray(self.fromto[3:], float)
+            else:
+                half = self.rot[:, 2] * self.size[1]
+                a, b = self.pos - half, self.pos + half
+            end = a if u @ a >= u @ b else b
+            if self.type == "capsule":
+                return end + self.size[0] * u
+            w = (b - a) / max(np.linalg.norm(b - a), 1e-12)
+            radial = u - (u @ w) * w
+            return end + self.size[0] * radial / max(np.linalg.norm(radial), 1e-12)
+        if self.type == "box":
+            return self.pos + self.rot @ (np.sign(self.rot.T @ u) * np.asarray(self.size[:3]))
+        return self.pos + self.size[0] * u      # sphere (and, as its bounding sphere, anything else)
+
 
 @dataclass(frozen=True)
 class Inertial:

@@ -52,7 +52,9 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     start = target - hook_tip
     end = start + d * distance
     reach = len(tl.frames)
-    tl.add(DURATIONS["approach"], pos=start + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot), hand=side["open"])
+    op.set_off(side, data, item, DURATIONS["approach"], pos=start + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot),
+               hand=side["open"])
+    op.planned_pos[item["drag"]] = centre + d * distance
     tl.add(DURATIONS["descend"], pos=start)
     op.look_again(side, item["drag"], data, reach, len(tl.frames))
     tl.add(DURATIONS["close"], hand=hooked)

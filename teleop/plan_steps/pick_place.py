@@ -139,7 +139,7 @@ def grasp_and_lift(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: 
         ready = open_
     grasp = op.object_pos(data, name) - offset
     reach = len(tl.frames)
-    tl.add(DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)
+    op.set_off(side, data, item, DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)
     tl.add(DURATIONS["descend"], pos=grasp)
     for duration, targets in closing:
         tl.add(duration, hand=targets)
@@ -198,8 +198,9 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     lifted = tl.frames[-1]
     lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, offset))])
     place = place_centre(op, data, item, item["pick"]) - offset
+    op.planned_pos[item["pick"]], op.planned_on[item["pick"]] = place + offset, item["place"]
     carry = len(tl.frames)
-    tl.add(DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP)
+    op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(item["pick"], offset))
     lower_and_release(op, item, item["pick"], offset, place)
     if item["place"] != TABLE_TARGET:
         op.look_again(side, item["place"], data, carry, len(tl.frames))

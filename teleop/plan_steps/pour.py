@@ -154,5 +154,6 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     # back down where it came from, or at place_offset of the table
     spot = {"place": TABLE_TARGET, "place_offset": list(item.get("place_offset", start[:2]))}
     place = place_centre(op, data, spot, name) - offset
+    op.planned_pos[name] = place + offset
     tl.add(POUR_DURATIONS["back"], pos=place + LIFT_HEIGHT_M * UP)
     lower_and_release(op, item, name, offset, place)

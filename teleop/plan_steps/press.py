@@ -19,7 +19,7 @@ import numpy as np
 
 from sim.embodiment.mirror import M
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
-from teleop.pinch_grasp import _kinematics
+from teleop.pinch_grasp import hand_kinematics
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
@@ -41,28 +41,9 @@ RELEASE_STEPS = 15           # back up to the hover height; the key's spring ret
 def _index_finger(hand_name: str) -> tuple[int, str]:
     """Row (in ``fingertips_in_site_frame``) and finger name of the pointing finger: the first
     finger that is not the thumb, found by the keypoint its retarget point follows."""
-    tips = _kinematics(hand_name).spec.fingertips
+    tips = hand_kinematics(hand_name).spec.fingertips
     row = next(i for i, t in enumerate(tips) if t.keypoint != "thumb_tip")
     return row, tips[row].finger
-
-
-def _support(geom, u: np.ndarray) -> np.ndarray:
-    """The point of ``geom`` (link frame) furthest along unit ``u`` (link frame)."""
-    if geom.type in ("capsule", "cylinder"):
-        if geom.fromto is not None:
-            a, b = np.asarray(geom.fromto[:3], float), np.asarray(geom.fromto[3:], float)
-        else:
-            half = geom.rot[:, 2] * geom.size[1]
-            a, b = geom.pos - half, geom.pos + half
-        end = a if u @ a >= u @ b else b
-        if geom.type == "capsule":
-            return end + geom.size[0] * u
-        w = (b - a) / max(np.linalg.norm(b - a), 1e-12)
-        radial = u - (u @ w) * w
-        return end + geom.size[0] * radial / max(np.linalg.norm(radial), 1e-12)
-    if geom.type == "box":
-        return geom.pos + geom.rot @ (np.sign(geom.rot.T @ u) * np.asarray(geom.size[:3]))
-    return geom.pos + geom.size[0] * u      # sphere (and, as its bounding sphere, anything else)
 
 
 def _lowest(kin, links, down_site: np.ndarray) -> np.ndarray:
@@ -75,7 +56,7 @@ def _lowest(kin, links, down_site: np.ndarray) -> np.ndarray:
         R, p = kin.data.xmat[body].reshape(3, 3), kin.data.xpos[body]
         u = R.T @ (site.rot @ down_site)                    # site -> hand base -> link frame
         for geom in link.geoms:
-            point = site.to_local(p + R @ _support(geom, u))
+            point = site.to_local(p + R @ geom.support(u))
             if point @ down_site > best_d:
                 best, best_d = point, point @ down_site
     return best
@@ -87,7 +68,7 @@ def pointing(hand_name: str) -> tuple[np.ndarray, np.ndarray, float]:
     the rest folded), the lowest point of the index finger in the wrist-site frame, and the finger
     pitch (degrees): the least at which every other part of the hand is CLEARANCE_M above that
     point (a person points no steeper than needed), else the one that clears them most."""
-    kin = _kinematics(hand_name)
+    kin = hand_kinematics(hand_name)
     row, finger = _index_finger(hand_name)
     moving = np.zeros(kin.dof, bool)
     for q in (kin.home, kin.mid):
@@ -149,7 +130,8 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         down = top + press * (travel + OVERSHOOT_M) - tip
         first = len(tl.frames)
         if k == 0:
-            tl.add(DURATIONS["approach"], pos=hover + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot), hand=point_hand)
+            op.set_off(side, data, item, DURATIONS["approach"], pos=hover + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot),
+                       hand=point_hand)
             tl.add(DURATIONS["descend"], pos=hover)
         else:
             tl.add(MOVE_STEPS, pos=hover)

@@ -115,7 +115,8 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         tilts.append(found[1])
     first = pose(start, radii[0], tilts[0], FACE_GAP_M)
     back = -first[1][:, 2] if pull else link.radial(faces[radii[0]])   # in along the fingers, or from beyond the free edge
-    tl.add(DURATIONS["approach"], pos=first[0] + APPROACH_HEIGHT_M * back, quat=quat(first[1]), hand=side["open"])
+    op.set_off(side, data, item, DURATIONS["approach"], pos=first[0] + APPROACH_HEIGHT_M * back, quat=quat(first[1]),
+               hand=side["open"])
     tl.add(DURATIONS["descend"], pos=first[0])
     previous = (faces[radii[0]], first[0])
     for angle, radius, tilt in zip(arc, radii, tilts):

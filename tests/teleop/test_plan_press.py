@@ -13,7 +13,8 @@ from sim.scene.builder import build_scene, demonstration_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP, pitched_palm_down
-from teleop.plan_steps.press import CLEARANCE_M, HOVER_M, _kinematics, _lowest, key_geometry, pointing
+from teleop.pinch_grasp import hand_kinematics
+from teleop.plan_steps.press import CLEARANCE_M, HOVER_M, _lowest, key_geometry, pointing
 from teleop.recorder import home, record_episode
 from teleop.scripted_operator import ScriptedOperator
 
@@ -51,7 +52,7 @@ def test_pointing_index_is_the_hands_lowest_point():
     assert 20.0 <= pitch <= 80.0
     assert np.count_nonzero(q == 0.0) == 1          # the Ability's home is open: only index_flex stays there
     assert tip[2] > 0.08                            # along the fingers, beyond the palm
-    kin = _kinematics("ability")
+    kin = hand_kinematics("ability")
     kin.points(q)
     down = pitched_palm_down(pitch).T @ -UP
     others = [link for link in kin.hand.links if link.finger != "index"]

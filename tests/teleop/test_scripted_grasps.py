@@ -10,14 +10,14 @@ from sim.errors import SpecError
 from sim.registry import names
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
-from teleop.pinch_grasp import _fingertip_rows, _kinematics, pinch_grasp, pinch_preshape
+from teleop.pinch_grasp import _fingertip_rows, hand_kinematics, pinch_grasp, pinch_preshape
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
 
 
 def _closest_sampled_gap(hand: str, fingers, samples: int = 4000) -> float:
     """The closest thumb-to-finger pad distance over random actuator targets (seeded)."""
-    kin = _kinematics(hand)
+    kin = hand_kinematics(hand)
     thumb, tips = _fingertip_rows(kin, fingers)
     rng = np.random.default_rng(12345)      # not the solver's own seed: these are other samples
     best = np.inf
@@ -30,7 +30,7 @@ def _closest_sampled_gap(hand: str, fingers, samples: int = 4000) -> float:
 @pytest.mark.parametrize("hand", names("hands"))
 def test_solved_pinch_is_at_least_as_close_as_random_search(hand):
     grasp = pinch_grasp(hand)
-    assert grasp.close.shape == (_kinematics(hand).dof,)
+    assert grasp.close.shape == (hand_kinematics(hand).dof,)
     assert grasp.gap_m <= _closest_sampled_gap(hand, grasp.fingers) + 1e-3
 
 
@@ -41,7 +41,7 @@ def test_every_hand_brings_the_pads_together(hand):
 
 def test_preshape_spreads_the_pads_and_centres_the_object_between_them():
     hand = "wuji"
-    kin, grasp = _kinematics(hand), pinch_grasp(hand)
+    kin, grasp = hand_kinematics(hand), pinch_grasp(hand)
     q, centre = pinch_preshape(hand, kin.home, grasp.close, 0.06)
     thumb, tips = _fingertip_rows(kin, grasp.fingers)
     P = kin.points(q)
