@@ -3,7 +3,8 @@
 Each step is one kind from STEP_KINDS, named by the field that says what it acts on: `pick` (carry
 an object to a target), `drag` (pull a container into a zone), `pour` (tip a bottle's mouth over a
 target), `press` (press keys or buttons in order), `turn` (swing a lid or a door to a joint angle),
-`carry` (both hands carry an object between their palms).
+`carry` (both hands carry an object between their palms), `strike` (hit a target once with a
+tool, then put the tool away).
 Every field is checked when the task loads, so a bad plan fails then, naming the step and the field.
 A new kind is a new entry here with its check, and a planner in teleop/plan_steps/.
 """
@@ -15,6 +16,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from sim.errors import SpecError
+from sim.scene.parts import parts_aabb
 
 TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
 PLAN_GRASPS = ("power", "pinch")
@@ -69,14 +71,8 @@ def _check_approach_pitch(path, where: str, step: dict) -> None:
         raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
 
 
-def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
-    """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
-    [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
-    object down at; grasp_yaw turns the hand about the vertical (degrees, or "across" the object's
-    narrow side); grasp_point is where a power grasp closes, in the object's frame."""
-    _check_object(path, where, step, "pick", scope.objects)
-    _check_object(path, where, step, "place", scope.objects, extra=(TABLE_TARGET,))
-    _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
+def _check_grasp(path, where: str, step: dict) -> None:
+    """How a step that picks something up holds it: [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point]."""
     if step.get("grasp", "power") not in PLAN_GRASPS:
         raise SpecError(path, f"{where}.grasp", f"one of {list(PLAN_GRASPS)}", step["grasp"])
     _check_approach_pitch(path, where, step)
@@ -87,6 +83,17 @@ def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
     if "grasp_point" in step and step.get("grasp", "power") == "pinch":
         raise SpecError(path, f"{where}.grasp_point", "no grasp_point with grasp: pinch (the pinch finds its own)",
                         step["grasp_point"])
+
+
+def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
+    """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
+    [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
+    object down at; grasp_yaw turns the hand about the vertical (degrees, or "across" the object's
+    narrow side); grasp_point is where a power grasp closes, in the object's frame."""
+    _check_object(path, where, step, "pick", scope.objects)
+    _check_object(path, where, step, "place", scope.objects, extra=(TABLE_TARGET,))
+    _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
+    _check_grasp(path, where, step)
 
 
 DRAG_HOOK_DEPTH_M = 0.02   # drag: curled fingertips this far below the container's rim
@@ -165,6 +172,26 @@ def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
         raise SpecError(path, f"{where}.to", f"an angle in rad within the joint range [{lo:g}, {hi:g}]", step["to"])
 
 
+def _check_strike(path, where: str, step: dict, scope: PlanScope) -> None:
+    """{hand, strike, tool, strike_point, place, [place_offset], [grasp], [grasp_point], [grasp_yaw],
+    [approach_pitch_deg], [after]}: pick the tool up (grasp fields as for `pick`), strike the target
+    object once with the tool's strike_point (tool frame, on the tool), then put the tool onto or
+    into `place` (an object, or `table` with place_offset a spot of the table top)."""
+    _check_object(path, where, step, "strike", scope.objects)
+    others = {n: o for n, o in scope.objects.items() if n != step["strike"]}
+    _check_object(path, where, step, "tool", others)
+    _check_vector(path, where, step, "strike_point", (3,), "[x, y, z] in the tool's frame, metres")
+    lo, hi = parts_aabb(scope.objects[step["tool"]].parts)
+    if not all(a <= v <= b for v, a, b in zip(step["strike_point"], lo, hi)):
+        raise SpecError(path, f"{where}.strike_point", f"a point on the tool, within its bounding box from "
+                        f"{[round(float(a), 3) for a in lo]} to {[round(float(b), 3) for b in hi]}",
+                        step["strike_point"])
+    tools = {n: o for n, o in scope.objects.items() if n != step["tool"]}
+    _check_object(path, where, step, "place", tools, extra=(TABLE_TARGET,))
+    _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
+    _check_grasp(path, where, step)
+
+
 BOTH_HANDS_KINDS = ("carry",)   # kinds whose step takes `hand: both`
 
 
@@ -195,6 +222,8 @@ STEP_KINDS: dict[str, StepKind] = {
     "press": StepKind(("hand", "press"), ("after",), _check_press),
     "turn": StepKind(("hand", "turn", "to"), ("after",), _check_turn),
     "carry": StepKind(("hand", "carry", "place"), ("place_offset", "grasp_height", "after"), _check_carry),
+    "strike": StepKind(("hand", "strike", "tool", "strike_point", "place"),
+                       ("place_offset", "grasp", "grasp_point", "grasp_yaw", "approach_pitch_deg", "after"), _check_strike),
 }
 PLAN_STEP = " or ".join("{" + ", ".join(k.required) + ", ...}" for k in STEP_KINDS.values())
 
