@@ -132,9 +132,26 @@ def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m
 
 def fingertips_in_site_frame(hand_name: str, q: np.ndarray) -> np.ndarray:
     """(fingers, 3) fingertip pad points of the right hand at actuator targets ``q``, in the
-    wrist-site frame (x lateral, y palm normal, z along the fingers)."""
+    wrist-site frame (x lateral, y palm normal, z along the fingers); rows in the order of the hand
+    file's `retarget.fingertips` (``fingertip_rows`` finds them by keypoint)."""
     kin = hand_kinematics(hand_name)
     return kin.hand.wrist_site.to_local(kin.points(q)[1:])
+
+
+THUMB_TIP = "thumb_tip"
+
+
+def fingertip_rows(hand_name: str, keypoints: tuple[str, ...] | None = None) -> list[int]:
+    """Rows of ``fingertips_in_site_frame`` whose retarget points follow ``keypoints`` (in that
+    order), or with None every finger's but the thumb's."""
+    followed = [t.keypoint for t in hand_kinematics(hand_name).spec.fingertips]
+    if keypoints is None:
+        return [i for i, k in enumerate(followed) if k != THUMB_TIP]
+    missing = [k for k in keypoints if k not in followed]
+    if missing:
+        raise DescriptionError(f"{hand_kinematics(hand_name).hand.path}: field 'retarget.fingertips': expected "
+                               f"points following {missing}, got {followed}")
+    return [followed.index(k) for k in keypoints]
 
 
 @functools.lru_cache(maxsize=None)

@@ -18,7 +18,7 @@ from sim.embodiment.mirror import M
 from sim.errors import SpecError
 from sim.scene.sample import zone_centre
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
-from teleop.pinch_grasp import fingertips_in_site_frame
+from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
 from teleop.plan_steps.pick_place import WALL
 
 if TYPE_CHECKING:
@@ -43,7 +43,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     # fingers point at -d: PALM_DOWN's fingers (+y) turned about z
     hand_rot = yawed(pitched_palm_down(item.get("pitch_deg", DRAG_PITCH_DEG)), np.arctan2(-d[1], -d[0]) - np.pi / 2)
     hooked = op.power(side, np.multiply(WALL, item.get("hook_closure", 1.0)))   # 1: the full wall hook
-    tips = fingertips_in_site_frame(side["hand"], hooked)[1:]        # the fingers, not the thumb
+    tips = fingertips_in_site_frame(side["hand"], hooked)[fingertip_rows(side["hand"])]   # the fingers, not the thumb
     if item["hand"] == "left":
         tips = tips @ M             # M is its own transpose: each row mirrored
     hook_tip = hand_rot @ tips.mean(axis=0)                         # curled fingertips from the site

@@ -19,7 +19,7 @@ import numpy as np
 
 from sim.embodiment.mirror import M
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
-from teleop.pinch_grasp import hand_kinematics
+from teleop.pinch_grasp import fingertip_rows, hand_kinematics
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
@@ -41,9 +41,8 @@ RELEASE_STEPS = 15           # back up to the hover height; the key's spring ret
 def _index_finger(hand_name: str) -> tuple[int, str]:
     """Row (in ``fingertips_in_site_frame``) and finger name of the pointing finger: the first
     finger that is not the thumb, found by the keypoint its retarget point follows."""
-    tips = hand_kinematics(hand_name).spec.fingertips
-    row = next(i for i, t in enumerate(tips) if t.keypoint != "thumb_tip")
-    return row, tips[row].finger
+    row = fingertip_rows(hand_name)[0]
+    return row, hand_kinematics(hand_name).spec.fingertips[row].finger
 
 
 def _lowest(kin, links, down_site: np.ndarray) -> np.ndarray:

@@ -29,13 +29,14 @@ import numpy as np
 from sim.embodiment.mirror import mirror_vec
 from sim.errors import SpecError
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, axis_rotation, quat
-from teleop.pinch_grasp import fingertips_in_site_frame
+from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
 
 TILTS_DEG = (45.0, 30.0, 15.0, 0.0)  # fingers tilted from the push direction towards the hinge: at first the tips
                                      # lead, under a lip; straighter later where the arm reaches no further
+PUSHING_TIPS = ("index_tip", "middle_tip")   # the pads that push (retarget keypoints they follow)
 PUSH_DEPTH_M = 0.004          # fingertip pads aimed this far into the face: they press on it
 FACE_GAP_M = 0.025            # ... and set down this far off it before pushing
 ARC_STEP_RAD = 0.1            # keyframes this far apart along the arc
@@ -62,7 +63,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
         return
     way = np.sign(target - start)               # +1: the way the joint angle grows
     link.choose_edge(way, side["home"][0])
-    tips = fingertips_in_site_frame(side["hand"], side["open"])[1:3]     # index and middle pads
+    tips = fingertips_in_site_frame(side["hand"], side["open"])[fingertip_rows(side["hand"], PUSHING_TIPS)]
     tip = tips.mean(axis=0)
     tip = mirror_vec(tip) if item["hand"] == "left" else tip
     n = max(1, int(np.ceil(abs(target - start) / ARC_STEP_RAD)))
@@ -229,7 +230,7 @@ class Hinge:
     def rest_angle(self, angle: float) -> float:
         """Where the link settles when let go at ``angle``: on the limit gravity turns it towards, or
         where it is if gravity has no hold on it."""
-        com = self.rotated(self.data.xipos[self.body], angle - self.angle)
+        com = self.rotated(self.data.subtree_com[self.body], angle - self.angle)   # with any child links
         weight = self.model.body_subtreemass[self.body] * self.model.opt.gravity
         torque = float(np.cross(com - self.anchor, weight) @ self.axis)
         if abs(torque) < GRAVITY_TORQUE_NM:

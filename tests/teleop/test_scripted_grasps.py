@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 import yaml
 
+from sim.embodiment.description import DescriptionError
 from sim.errors import SpecError
 from sim.registry import names
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
-from teleop.pinch_grasp import _fingertip_rows, hand_kinematics, pinch_grasp, pinch_preshape
+from teleop.pinch_grasp import _fingertip_rows, fingertip_rows, hand_kinematics, pinch_grasp, pinch_preshape
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
 
@@ -244,3 +245,13 @@ def test_a_plan_name_of_the_wrong_kind_is_named_not_a_type_error(tmp_path, field
     raw["demo_plan"][step][field] = bad
     with pytest.raises(SpecError, match=rf"bowl.yaml: field 'demo_plan\[{step}\].{field}'"):
         parse_task(raw, tmp_path / "bowl.yaml")
+
+
+@pytest.mark.parametrize("hand", names("hands"))
+def test_fingertip_rows_are_found_by_the_keypoint_each_follows(hand):
+    followed = [t.keypoint for t in hand_kinematics(hand).spec.fingertips]
+    fingers = fingertip_rows(hand)
+    assert "thumb_tip" not in [followed[i] for i in fingers] and len(fingers) == len(followed) - 1
+    assert [followed[i] for i in fingertip_rows(hand, ("middle_tip", "index_tip"))] == ["middle_tip", "index_tip"]
+    with pytest.raises(DescriptionError, match=r"retarget\.fingertips.*\['sixth_tip'\]"):
+        fingertip_rows(hand, ("index_tip", "sixth_tip"))
