@@ -71,16 +71,20 @@ def _check_approach_pitch(path, where: str, step: dict) -> None:
         raise SpecError(path, f"{where}.approach_pitch_deg", f"degrees in [{lo:g}, {hi:g}]", pitch)
 
 
-def _check_grasp(path, where: str, step: dict) -> None:
-    """How a step that picks something up holds it: [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point]."""
-    if step.get("grasp", "power") not in PLAN_GRASPS:
-        raise SpecError(path, f"{where}.grasp", f"one of {list(PLAN_GRASPS)}", step["grasp"])
+def _check_grasp(path, where: str, step: dict, grasps: tuple[str, ...] = PLAN_GRASPS, default: str = "power",
+                 across: bool = True) -> None:
+    """How a step that picks something up holds it: [grasp] (one of ``grasps``), [approach_pitch_deg],
+    [grasp_yaw] (degrees, or with ``across`` also "across"), [grasp_point] (not with a pinch)."""
+    grasp = step.get("grasp", default)
+    if grasp not in grasps:
+        raise SpecError(path, f"{where}.grasp", f"one of {list(grasps)}", grasp)
     _check_approach_pitch(path, where, step)
     yaw = step.get("grasp_yaw", 0.0)
-    if yaw != GRASP_YAW_ACROSS and not (_is_number(yaw) and -180.0 <= yaw <= 180.0):
-        raise SpecError(path, f"{where}.grasp_yaw", f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]", yaw)
+    if not (across and yaw == GRASP_YAW_ACROSS) and not (_is_number(yaw) and -180.0 <= yaw <= 180.0):
+        expected = f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]" if across else "degrees in [-180, 180]"
+        raise SpecError(path, f"{where}.grasp_yaw", expected, yaw)
     _check_vector(path, where, step, "grasp_point", (3,), "[x, y, z] in the object's frame, metres")
-    if "grasp_point" in step and step.get("grasp", "power") == "pinch":
+    if "grasp_point" in step and grasp == "pinch":
         raise SpecError(path, f"{where}.grasp_point", "no grasp_point with grasp: pinch (the pinch finds its own)",
                         step["grasp_point"])
 
@@ -140,9 +144,12 @@ POUR_DEFAULT_GRASP = "side"
 
 
 def _check_pour(path, where: str, step: dict, scope: PlanScope) -> None:
-    """{hand, pour, into, [tilt_deg], [grasp], [approach_pitch_deg], [place_offset], [after]}: tip a
-    pourer (an object with a `mouth_axis`) over `into` (an object, or a task point: poured just above
-    it), then set it down where it was or at place_offset [x, y] of the table top."""
+    """{hand, pour, into, [tilt_deg], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point], [place_offset],
+    [after]}: tip a pourer (an object with a `mouth_axis`) over `into` (an object, or a task point:
+    poured just above it), then set it down where it was or at place_offset [x, y] of the table top;
+    grasp_yaw (degrees) turns the hand about the vertical before it closes and grasp_point is where it
+    closes, in the pourer's frame (as for `pick`: e.g. a side grasp held above the middle and off the
+    palm, so that the thumb comes down beside a bottle's shoulder, not onto it)."""
     pourers = sorted(n for n, o in scope.objects.items() if o.mouth_axis is not None)
     if step["pour"] not in pourers:
         raise SpecError(path, f"{where}.pour", f"an object with a mouth_axis from {pourers}", step["pour"])
@@ -155,9 +162,7 @@ def _check_pour(path, where: str, step: dict, scope: PlanScope) -> None:
     if not _is_number(tilt) or not lo <= tilt <= hi:
         raise SpecError(path, f"{where}.tilt_deg", f"degrees in [{lo:g}, {hi:g}]", tilt)
     _check_vector(path, where, step, "place_offset", (2,), "[x, y] of the table top in metres")
-    if step.get("grasp", POUR_DEFAULT_GRASP) not in POUR_GRASPS:
-        raise SpecError(path, f"{where}.grasp", f"one of {list(POUR_GRASPS)}", step["grasp"])
-    _check_approach_pitch(path, where, step)
+    _check_grasp(path, where, step, POUR_GRASPS, POUR_DEFAULT_GRASP, across=False)   # "across": not for a side grasp
 
 
 def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
@@ -217,7 +222,8 @@ STEP_KINDS: dict[str, StepKind] = {
                      ("place_offset", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "after"), _check_pick),
     "drag": StepKind(("hand", "drag", "to_zone"), ("place_offset", "hook_depth", "pitch_deg", "hook_closure", "after"),
                      _check_drag),
-    "pour": StepKind(("hand", "pour", "into"), ("tilt_deg", "grasp", "approach_pitch_deg", "place_offset", "after"),
+    "pour": StepKind(("hand", "pour", "into"),
+                     ("tilt_deg", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "place_offset", "after"),
                      _check_pour),
     "press": StepKind(("hand", "press"), ("after",), _check_press),
     "turn": StepKind(("hand", "turn", "to"), ("after",), _check_turn),

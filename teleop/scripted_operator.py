@@ -90,7 +90,7 @@ class ScriptedOperator:
                                 "closed": closed, "group": group, "grasp_centre": grasp.centre,
                                 "pinch_close": np.clip(pinch.close, lo, hi), "hand": hand.name,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
-                                "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, open_, start),
+                                "looks": [], "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, open_, start),
                                 "home": (pos0, quat0), "name": side}
         ends: list[int] = []         # each step's last control step
         for item in scene.task.demo_plan:
@@ -160,6 +160,13 @@ class ScriptedOperator:
         side["reaims"].append((side["timeline"].frames[first - 1].end_step, name, self.object_pos(data, name),
                                slice(first, end)))
 
+    @staticmethod
+    def look_at(side: dict, frame: int, adjust) -> None:
+        """When frame ``frame`` ends the operator looks, and ``adjust(data)`` (the plan step's own)
+        changes this step's later keyframes: e.g. a bottle turned in the hand while pouring is turned
+        back upright by how it sits, not by how the hand was."""
+        side["looks"].append((side["timeline"].frames[frame].end_step, adjust))
+
     def _reaim(self, side: dict, data: mujoco.MjData, step: int) -> None:
         while side["reaims"] and side["reaims"][0][0] <= step:
             _, name, planned, frames = side["reaims"].pop(0)
@@ -195,6 +202,8 @@ class ScriptedOperator:
         for name, side in self.sides.items():
             self._reaim(side, data, step)
             self._correct_place(side, data, step)
+            while side["looks"] and side["looks"][0][0] <= step:     # a plan step's own look (look_at)
+                side["looks"].pop(0)[1](data)
             out[name] = side["timeline"].at(step)
         return out
 

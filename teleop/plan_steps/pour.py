@@ -8,7 +8,9 @@ point the evaluator's `tilted_over` measures: the bounding box surface along the
 `mouth_axis`) is over the target (an object, or a task point such as a bowl's centre); hold, turn
 back upright, carry it to where it came from (or to `place_offset` on the table) and set it down. Which way to turn is chosen with the arm's IK: a turn
 that is reached, the palm ending under the pourer (a hand holds best what rests in it), else the
-smaller joint motion.
+smaller joint motion. `grasp_yaw` and `grasp_point` place the grasp as for `pick`. Turned back, the
+operator looks at how the pourer now sits in the hand and turns it upright by the pourer itself
+(upright_in_hand); let go, the open hand rises clear of its top before it moves on.
 """
 
 from __future__ import annotations
@@ -21,8 +23,9 @@ import numpy as np
 from evaluation.geometry import axis_extent
 from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, TABLE_TARGET
 from sim.scene.reach import PALM_DOWN
-from teleop.operator_motion import LIFT_HEIGHT_M, UP, SideTimeline, axis_rotation, quat
+from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.pick_place import RELEASE_GAP_M, grasp_and_lift, lower_and_release, place_centre
+from teleop.transit import CLEARANCE_M, hand_outline
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
@@ -34,6 +37,7 @@ BOTTOM_ABOVE_RIM_M = 0.04     # carried upright over the target, the pourer's bo
 RIM_INSET_M = 0.03            # the aim stays this far inside a container's cavity walls
 TILT_STEP_DEG = 1.0           # resolution of the turn that reaches the wanted tilt
 SIDE_GRASP_ROLL_DEG = 90.0    # `grasp: side`: the right hand palm towards the body's midline, thumb up
+SLIPPED_OUT_M = 0.05          # the pourer this much further from the wrist than held: it is not in the hand
 POUR_DURATIONS = {"to_target": 70, "tilt": 70, "pour": 70, "untilt": 70, "back": 120}
 
 
@@ -149,6 +153,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     tl.add(POUR_DURATIONS["tilt"], pos=tipped, quat=quat(T @ hand_rot))
     tl.add(POUR_DURATIONS["pour"])
     tl.add(POUR_DURATIONS["untilt"], pos=over, quat=quat(hand_rot))
+    untilted = len(tl.frames) - 1
     if target in op.scene.task.objects:     # an object may have been nudged since; a point stays put
         op.look_again(side, target, data, carry, len(tl.frames))
     # back down where it came from, or at place_offset of the table
@@ -157,3 +162,38 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     op.planned_pos[name] = place + offset
     tl.add(POUR_DURATIONS["back"], pos=place + LIFT_HEIGHT_M * UP)
     lower_and_release(op, item, name, offset, place)
+    # the open hand rises clear of the bottle's top before it moves away: held from the side, the
+    # hand is beside the bottle and lower than its top, and a move across would sweep it over
+    lowest = float(np.min((hand_outline(side["hand"], item["hand"], side["open"]) @ hand_rot.T)[:, 2]))
+    top = place[2] + offset[2] + float(obj.half_extents[2])
+    clear = top + CLEARANCE_M - lowest
+    if clear > tl.frames[-1].pos[2]:
+        tl.add(DURATIONS["lift"], pos=np.array([*tl.frames[-1].pos[:2], clear]))
+    op.look_at(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
+                                               range(untilted + 1, len(tl.frames))))
+
+
+def upright_in_hand(op: ScriptedOperator, side: dict, name: str, axis_local: np.ndarray, hand_rot: np.ndarray,
+                    offset: np.ndarray, frames: range):
+    """The look after the pourer is turned back: a bottle that turned in the grip while tipped (it
+    does, held from the side) stands tilted in a hand turned back level, and set down so it falls
+    over. A person turns it upright by the bottle itself: the hand turns by what the bottle is
+    off vertical, and the set-down keyframes (``frames``) move with the bottle's new place in it."""
+    def adjust(data: mujoco.MjData) -> None:
+        body = op.scene.object_body_ids[name]
+        wrist_rot = data.site_xmat[side["wrist_site_id"]].reshape(3, 3)
+        in_hand = wrist_rot.T @ data.xmat[body].reshape(3, 3)
+        at = wrist_rot.T @ (data.xpos[body] - data.site_xpos[side["wrist_site_id"]])
+        if np.linalg.norm(at) > np.linalg.norm(offset) + SLIPPED_OUT_M:      # not in the hand any more
+            return
+        up = hand_rot @ in_hand @ axis_local                # where the mouth would point, hand level
+        turn = np.cross(up, UP)
+        angle = float(np.arctan2(np.linalg.norm(turn), up @ UP))
+        if angle < 1e-6:
+            return
+        rot = axis_rotation(turn / np.linalg.norm(turn), angle) @ hand_rot
+        moved = offset - rot @ at           # each keyframe was the wrist for `offset`; now for the new hold
+        for frame in side["timeline"].frames[frames.start:frames.stop]:
+            frame.pos, frame.quat = frame.pos + moved, quat(rot)
+        offset[:] = rot @ at                # lower_and_release's slip correction measures against it
+    return adjust

@@ -20,6 +20,7 @@ SETTINGS = [
     ("canned_food_tray_arrangement", "iiwa7_sharpa", 11),
     ("condiment_box_loading", "ur5_wuji", 0),
     ("fruit_bowl_loading", "ur5_rh56dfx", 7),
+    ("frypan_stand_pour", "ur5_schunk", 0),
     ("gaming_desk_setup", "jaka_zu7_dexhand021", 0),
     ("medicine_shoebox_pack", "panda_orca", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),

@@ -9,6 +9,7 @@ from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
+from teleop.operator_motion import axis_rotation, quat
 from teleop.plan_steps.pour import POUR_DURATIONS, mouth_local
 from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
@@ -33,6 +34,10 @@ def _check(**fields):
     ({"place_offset": [0.1, 0.1, 0.0]}, "place_offset"),   # a table spot: [x, y]
     ({"approach_pitch_deg": 95}, "approach_pitch_deg"),
     ({"spill": True}, "spill"),
+    ({"grasp_yaw": "across"}, "grasp_yaw"),      # a bottle has no narrow side: degrees only
+    ({"grasp_yaw": 200}, "grasp_yaw"),
+    ({"grasp_point": [0.0, 0.03]}, "grasp_point"),
+    ({"grasp": "pinch", "grasp_point": [0.0, 0.0, 0.03]}, "grasp_point"),
 ])
 def test_check_refuses_bad_fields(fields, field):
     with pytest.raises(SpecError, match=rf"demo_plan\[0\]\.{field}"):
@@ -41,6 +46,7 @@ def test_check_refuses_bad_fields(fields, field):
 
 def test_check_accepts_a_pour():
     assert _check(tilt_deg=90, grasp="side", place_offset=[0.3, -0.1])[0]["pour"] == "soy_sauce"
+    assert _check(grasp_yaw=-30, grasp_point=[0.005, 0.0, 0.03])[0]["grasp_yaw"] == -30
 
 
 def _operator(step):
@@ -80,6 +86,52 @@ def test_keyframes_tip_the_mouth_over_the_target():
     assert side["kin"].ik(tilted.pos, tilted.quat, side["q"]).success      # the arm reaches the turn
     # tipped back upright before it goes home: the last keyframes hold the grasp's orientation
     assert abs(np.dot(frames[-4].quat, grasp.quat)) > 0.999
+
+
+def test_grasp_yaw_and_grasp_point_move_the_side_grasp():
+    """grasp_yaw turns the side grasp about the vertical; grasp_point raises where the hand closes."""
+    scene, data, _ = _operator({})
+    base = _operator({})[2].sides["right"]["timeline"].frames[2]        # descended, about to close
+    turned = _operator({"grasp_yaw": -30})[2].sides["right"]["timeline"].frames[2]
+    yaw = np.array([[np.cos(-np.pi / 6), -np.sin(-np.pi / 6), 0.0], [np.sin(-np.pi / 6), np.cos(-np.pi / 6), 0.0],
+                    [0.0, 0.0, 1.0]])
+    assert np.allclose(_mat(turned.quat), yaw @ _mat(base.quat), atol=1e-6)
+    raised = _operator({"grasp_point": [0.0, 0.0, 0.03]})[2].sides["right"]["timeline"].frames[2]
+    lift = (data.xmat[scene.object_body_ids["soy_sauce"]].reshape(3, 3) @ [0.0, 0.0, 0.03])[2]
+    assert raised.pos[2] - base.pos[2] == pytest.approx(lift, abs=1e-6)
+
+
+def test_look_after_the_untilt_turns_the_bottle_upright_by_the_bottle():
+    """Held from the side, a bottle turns in the grip while tipped (20 degrees here): the look after
+    the untilt turns the hand so that the bottle, as it now sits in it, stands upright, and moves the
+    set-down keyframes so that its centre still goes where it was to go."""
+    scene, data, op = _operator({})
+    side = op.sides["right"]
+    frames = side["timeline"].frames
+    when, adjust = side["looks"][0]
+    first = next(i for i, f in enumerate(frames) if f.end_step > when)      # the keyframes after the look
+    planned = [(f.pos.copy(), _mat(f.quat)) for f in frames[first:-1]]
+    grasp = frames[2]
+    body = scene.object_body_ids["soy_sauce"]
+    in_hand = _mat(grasp.quat).T @ data.xmat[body].reshape(3, 3)
+    offset = _mat(grasp.quat).T @ (data.xpos[body] - grasp.pos)
+    # the bottle in the hand as it was held, then turned 20 degrees in the grip (about its own x)
+    turn = axis_rotation(np.array([1.0, 0.0, 0.0]), np.radians(20.0))
+    wrist_rot = data.site_xmat[side["wrist_site_id"]].reshape(3, 3)
+    adr = scene.model.jnt_qposadr[scene.model.body_jntadr[body]]
+    data.qpos[adr:adr + 3] = data.site_xpos[side["wrist_site_id"]] + wrist_rot @ offset
+    data.qpos[adr + 3:adr + 7] = quat(wrist_rot @ in_hand @ turn)
+    mujoco.mj_forward(scene.model, data)
+    held = wrist_rot.T @ data.xmat[body].reshape(3, 3)
+    at = wrist_rot.T @ (data.xpos[body] - data.site_xpos[side["wrist_site_id"]])
+    axis = np.asarray(scene.task.objects["soy_sauce"].mouth_axis, float)
+    assert (planned[0][1] @ held @ axis)[2] < np.cos(np.radians(15.0))     # as planned: set down tilted
+    adjust(data)
+    for (pos, R), frame in zip(planned, frames[first:-1]):
+        R_new = _mat(frame.quat)
+        assert (R_new @ held @ axis)[2] > np.cos(np.radians(1.0))
+        # where the bottle's centre goes with the hand at this keyframe: as planned
+        assert frame.pos + R_new @ at == pytest.approx(pos + R @ offset, abs=1e-6)
 
 
 def test_episode_tips_the_bottle_over_the_target():
