@@ -82,7 +82,9 @@ class EpisodeWriter:
 
     def append(self, frame: dict) -> None:
         values = {key: value if isinstance(value, str) else np.asarray(value) for key, value in frame.items()}
-        buffered = {key: self._buffered(key, value) for key, value in values.items()}   # checks all first
+        layout = {key: self._row_layout(key, value) for key, value in values.items()}   # checks all first
+        self._layout.update(layout)       # a refused frame leaves no layout behind for its new keys
+        buffered = {key: small for key, (_, small) in layout.items()}
         for key, value in values.items():
             if buffered[key]:
                 # a copy: callers pass views into MjData that change with the next step
@@ -94,19 +96,17 @@ class EpisodeWriter:
             stream.write(self._count, value)
         self._count += 1
 
-    def _buffered(self, key: str, value) -> bool:
-        """Whether ``key``'s frames are kept in memory until close (decided by its first frame's size).
-        Every frame of a key has its first frame's shape (text stays text): a dataset has one row shape."""
+    def _row_layout(self, key: str, value) -> tuple[tuple | None, bool]:
+        """``key``'s row shape (None: text) and whether its frames are kept in memory until close, both
+        from its first frame; a later frame of another shape (text for an array) is refused."""
         shape = None if isinstance(value, str) else value.shape
-        if key not in self._layout:
-            self._layout[key] = (shape, shape is None or value.nbytes < SMALL_FRAME_BYTES)
-        first, buffered = self._layout[key]
+        first, buffered = self._layout.get(key, (shape, shape is None or value.nbytes < SMALL_FRAME_BYTES))
         if shape != first:
             expected = "text" if first is None else f"shape {first}"
             got = "text" if shape is None else f"shape {shape}"
             raise ValueError(f"{self.path}: frame {self._count} of '{key}': expected {expected} as in its first "
                              f"frame, got {got}")
-        return buffered
+        return first, buffered
 
     def _create(self, key: str, value: np.ndarray) -> h5py.Dataset:
         image_like = value.ndim >= 2 and value.size >= 1024

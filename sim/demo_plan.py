@@ -162,7 +162,8 @@ def _check_pour(path, where: str, step: dict, scope: PlanScope) -> None:
     if not _is_number(tilt) or not lo <= tilt <= hi:
         raise SpecError(path, f"{where}.tilt_deg", f"degrees in [{lo:g}, {hi:g}]", tilt)
     _check_vector(path, where, step, "place_offset", (2,), "[x, y] of the table top in metres")
-    _check_grasp(path, where, step, POUR_GRASPS, POUR_DEFAULT_GRASP, across=False)   # "across": not for a side grasp
+    # grasp_yaw in degrees only: "across" is worked out for a hand closing from above
+    _check_grasp(path, where, step, POUR_GRASPS, POUR_DEFAULT_GRASP, across=False)
 
 
 def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
@@ -191,8 +192,8 @@ def _check_strike(path, where: str, step: dict, scope: PlanScope) -> None:
         raise SpecError(path, f"{where}.strike_point", f"a point on the tool, within its bounding box from "
                         f"{[round(float(a), 3) for a in lo]} to {[round(float(b), 3) for b in hi]}",
                         step["strike_point"])
-    tools = {n: o for n, o in scope.objects.items() if n != step["tool"]}
-    _check_object(path, where, step, "place", tools, extra=(TABLE_TARGET,))
+    places = {n: o for n, o in scope.objects.items() if n != step["tool"]}
+    _check_object(path, where, step, "place", places, extra=(TABLE_TARGET,))
     _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
     _check_grasp(path, where, step)
 

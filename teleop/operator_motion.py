@@ -18,6 +18,8 @@ FORWARD = np.array([0.0, 1.0, 0.0])   # palm down, the fingers point this way (w
 DURATIONS = {"approach": 60, "descend": 40, "close": 40, "close_late": 50, "hold": 10, "lift": 40,
              "carry": 60, "lower": 40, "open": 20, "retreat": 30}
 APPROACH_HEIGHT_M = 0.12
+NOT_IN_HAND_M = 0.06          # an object this far from where the hand holds it is not in the hand at all
+SMOOTHSTEP_PEAK = 1.5         # a timeline segment's peak speed over its mean (SideTimeline.at)
 LIFT_HEIGHT_M = 0.14
 
 

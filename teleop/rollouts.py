@@ -39,7 +39,7 @@ def run_rollouts(task: str, embodiment: str, channel_name: str, anchors: list[tu
     for i in range(episodes):
         anchor_id, anchor = anchors[i % len(anchors)] if anchors else (None, None)
         seed = rollout_seed(task, channel_name, i)
-        labels = {"task": task, "embodiment": embodiment, "policy": policy, "channel": channel_name,
+        labels = {"task": task, "embodiment": embodiment, "policy": policy, "operator": operator, "channel": channel_name,
                   "episode": i, "seed": seed, "anchor": anchor_id if chan.anchored else None}
         try:
             sample = channel_sample(spec, chan, seed, anchor, anchor_id)

@@ -20,13 +20,12 @@ from sim.demo_plan import BOTH_HANDS, step_kind
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
-from teleop.operator_motion import DURATIONS, SideTimeline, axis_rotation
+from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation
 from teleop.pinch_grasp import pinch_grasp
 from teleop.plan_steps import PLANNERS
 from teleop.transit import hand_outline, object_corners, obstacles, transit_height
 
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
-MAX_SLIP_M = 0.06             # a larger offset means the object is not in the hand at all
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
 SETTLE_STEPS = 120            # after the last release; reach-and-stop ends earlier on success
 
@@ -44,15 +43,10 @@ def hand_grasp(hand: HandDescription, side: str) -> TabletopGrasp:
     return dataclasses.replace(grasp, centre=mirror_vec(grasp.centre)) if side == "left" else grasp
 
 
-def step_objects(item: dict) -> set[str]:
-    """The objects a plan step names (what it picks, places on, drags, pours, presses: "<object>/<link>"
-    names its object)."""
-    names = set()
-    for value in item.values():
-        for v in value if isinstance(value, list) else [value]:
-            if isinstance(v, str):
-                names.add(v.split("/")[0])
-    return names
+def step_objects(item: dict, objects) -> set[str]:
+    """The ``objects`` a plan step names in any field ("<object>/<link>" names its object)."""
+    values = [v for value in item.values() for v in (value if isinstance(value, list) else [value])]
+    return {v.split("/")[0] for v in values if isinstance(v, str) and v.split("/")[0] in objects}
 
 
 class ScriptedOperator:
@@ -64,8 +58,10 @@ class ScriptedOperator:
         self.ctrl_home = scene.layout.home_ctrl.copy()
         self.sides = {}
         self.link_angles: dict[str, float] = {}     # where earlier `turn` steps leave each link (planned)
-        self.planned_pos: dict[str, np.ndarray] = {}  # where earlier steps leave the objects they move (planned)
-        self.planned_on: dict[str, str] = {}     # ... and the object they leave each on or in
+        # where plan steps leave the objects they move (and on or in what), and the control step by
+        # which: (step, name, pos, on)
+        self.moves: list[tuple[int, str, np.ndarray, str | None]] = []
+        self._leaving: list[tuple[str, np.ndarray, str | None]] = []   # the step being planned's, stamped at its end
         hand = load_embodiment(scene.layout.embodiment).hand
         for side, lay in scene.layout.sides.items():
             kin = scene.layout.arm_kinematics(side)
@@ -104,6 +100,8 @@ class ScriptedOperator:
                     tl.add(wait_until - tl.end)     # the hand holds still until those steps are done
             PLANNERS[step_kind(item)](self, data, item)
             ends.append(max(tl.end for tl in tls))
+            self.moves += [(ends[-1], *left) for left in self._leaving]
+            self._leaving = []
         for side in self.sides.values():
             side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], hand=side["open"])
         self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS
@@ -112,31 +110,41 @@ class ScriptedOperator:
         """Where object ``name`` is now (world)."""
         return data.xpos[self.scene.object_body_ids[name]].copy()
 
+    def leaves(self, name: str, pos: np.ndarray, on: str | None = None) -> None:
+        """The plan step being planned leaves object ``name`` with its centre at ``pos`` (world) by its
+        end, on or in object ``on`` (None: the table)."""
+        self._leaving.append((name, np.asarray(pos, float).copy(), on))
+
+    def planned_place(self, data: mujoco.MjData, name: str, step: int) -> tuple[np.ndarray, str | None]:
+        """Where object ``name`` is at control step ``step`` as planned, and what it is on or in: where
+        the last step to move it by then left it, else where it is now."""
+        done = [(pos, on) for end, n, pos, on in self.moves if n == name and end <= step]
+        return done[-1] if done else (self.object_pos(data, name), None)
+
     def set_off(self, side: dict, data: mujoco.MjData, item: dict, duration: int, pos, quat=None, hand=None,
                 carried: tuple[str, np.ndarray] | None = None) -> None:
         """Move the hand from its last keyframe to ``pos`` (``quat``, ``hand``) in ``duration`` steps,
-        as ``SideTimeline.add``; when the straight move would pass too low over an object (at the place
-        an earlier step left it), first rise to a transit height, move across there, then come down
-        (teleop/transit.py). ``carried``: the object held (its centre's offset from the wrist, world),
-        which must clear them too. The step's own objects (what it grasps, targets, carries) are not
-        in the way: the hand comes down to them."""
+        as ``SideTimeline.add``; when the straight move would pass too low over an object (where the
+        plan has it when the move starts), first rise to a transit height, move across there, then
+        come down (teleop/transit.py). ``carried``: the object held (its centre's offset from the
+        wrist, world), which must clear the others too."""
         tl: SideTimeline = side["timeline"]
         last = tl.frames[-1]
         quat = last.quat if quat is None else np.asarray(quat, float)
         hand = last.hand if hand is None else np.asarray(hand, float)
-        mine = step_objects(item)
         ids = self.scene.object_body_ids
-        if carried is not None:
-            mine.add(carried[0])
-        # what earlier steps put into or onto the step's target is part of what the hand comes down to
-        mine |= {n for n, on in self.planned_on.items() if on in mine}
         model, turned = self.scene.model, {}
         for link, angle in self.link_angles.items():       # links earlier `turn` steps swing round
             j = model.joint(link).id
             turned[int(model.jnt_bodyid[j])] = (data.xanchor[j].copy(), axis_rotation(
                 data.xaxis[j], angle - float(data.qpos[model.jnt_qposadr[j]])))
+        placed = {n: self.planned_place(data, n, tl.end) for n in ids}
+        # not in the way: the objects the step names (what it takes hold of, where it puts it) and what
+        # earlier steps left on or in them, which the hand comes down to anyway; what it carries
+        mine = step_objects(item, ids) | ({carried[0]} if carried else set())
+        mine |= {n for n, (_, on) in placed.items() if on in mine}
         in_way = [ob for n, b in ids.items() if n not in mine
-                  for ob in obstacles(model, data, n, b, self.planned_pos.get(n, data.xpos[b]) - data.xpos[b], turned)]
+                  for ob in obstacles(model, data, n, b, placed[n][0] - data.xpos[b], turned)]
         points = None
         if carried is not None:
             name, offset = carried
@@ -161,7 +169,7 @@ class ScriptedOperator:
                                slice(first, end)))
 
     @staticmethod
-    def look_at(side: dict, frame: int, adjust) -> None:
+    def on_frame_end(side: dict, frame: int, adjust) -> None:
         """When frame ``frame`` ends the operator looks, and ``adjust(data)`` (the plan step's own)
         changes this step's later keyframes: e.g. a bottle turned in the hand while pouring is turned
         back upright by how it sits, not by how the hand was."""
@@ -187,7 +195,7 @@ class ScriptedOperator:
             wrist = data.site_xpos[side["wrist_site_id"]]
             error = (self.object_pos(data, name) - wrist) - planned_offset
             error[2] = 0.0      # height is set by the release gap
-            if np.linalg.norm(error) > MAX_SLIP_M:     # not in the hand: nothing to correct for
+            if np.linalg.norm(error) > NOT_IN_HAND_M:     # nothing to correct for
                 continue
             for frame in side["timeline"].frames[frames]:    # lower .. the end of this pick
                 frame.pos = frame.pos - error
@@ -202,7 +210,7 @@ class ScriptedOperator:
         for name, side in self.sides.items():
             self._reaim(side, data, step)
             self._correct_place(side, data, step)
-            while side["looks"] and side["looks"][0][0] <= step:     # a plan step's own look (look_at)
+            while side["looks"] and side["looks"][0][0] <= step:     # a plan step's own look (on_frame_end)
                 side["looks"].pop(0)[1](data)
             out[name] = side["timeline"].at(step)
         return out

@@ -51,6 +51,16 @@ def test_a_frame_of_another_shape_is_refused_whole_and_names_the_key(tmp_path, f
         assert f["kept"][()].tolist() == [0.0, 2.0] and len(f["changing"]) == 2
 
 
+def test_a_refused_frame_leaves_no_layout_for_its_new_keys(tmp_path):
+    with EpisodeWriter(tmp_path / "e.h5", {}) as w:
+        w.append({"a": np.zeros(3)})
+        with pytest.raises(ValueError, match="'a'"):
+            w.append({"c": np.zeros(5), "a": np.zeros(4)})       # c is new; a is refused
+        w.append({"a": np.zeros(3), "c": np.zeros(7)})           # c's first written frame sets its shape
+    with h5py.File(tmp_path / "e.h5") as f:
+        assert f["c"].shape == (2, 7) and f["c"][0].tolist() == [0.0] * 7
+
+
 def _pipeline(ds: h5py.Dataset) -> list[int]:
     dcpl = ds.id.get_create_plist()
     return [dcpl.get_filter(i)[0] for i in range(dcpl.get_nfilters())]

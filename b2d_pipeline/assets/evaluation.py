@@ -30,7 +30,7 @@ def build(settings: FactorySettings):
     profile = settings.profile
 
     @dg.asset(partitions_def=setting_channel_partitions, group_name="evaluation", deps=["episodes"],
-              code_version="1", description="Scripted-operator rollouts per channel, anchored on the recorded episodes.")
+              code_version="2", description="Scripted-operator rollouts per channel, anchored on the recorded episodes.")
     def channel_rollouts(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         keys = context.partition_key.keys_by_dimension
         setting = parse_setting_key(keys["setting"])

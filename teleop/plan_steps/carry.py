@@ -85,7 +85,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     f = np.array([-a[1], a[0], 0.0])          # the fingers' heading: away from the body
     knuckles = knuckle_reach(load_embodiment(op.scene.layout.embodiment).hand)
     place = place_centre(op, data, item, name)          # the object's centre where it is let go
-    op.planned_pos[name], op.planned_on[name] = place, item["place"]
+    op.leaves(name, place, on=item["place"])
     target_top = op.object_pos(data, item["place"])[2] + task.objects[item["place"]].half_extents[2]
     carry_z = target_top + CARRY_CLEARANCE_M + obj.half_extents[2]   # its bottom clears the target's top
     for side_name in ("right", "left"):

@@ -54,7 +54,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     reach = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["approach"], pos=start + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot),
                hand=side["open"])
-    op.planned_pos[item["drag"]] = centre + d * distance
+    op.leaves(item["drag"], centre + d * distance)
     tl.add(DURATIONS["descend"], pos=start)
     op.look_again(side, item["drag"], data, reach, len(tl.frames))
     tl.add(DURATIONS["close"], hand=hooked)

@@ -166,9 +166,11 @@ def place_centre(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: st
     return np.array([*place_xy, place_z])
 
 
-def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray) -> None:
+def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray,
+                      rise_to: float = -np.inf) -> None:
     """From above ``place`` (the wrist position that lets object ``name`` go where it belongs):
-    lower, open, retreat; before lowering, the operator corrects for how the object has slipped."""
+    lower, open, retreat (and on up to wrist height ``rise_to``); before lowering, the operator
+    corrects every one of these keyframes for how the object has slipped."""
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     # above the target the operator looks where the object really sits in the hand (it may
@@ -177,6 +179,8 @@ def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.nd
     tl.add(DURATIONS["lower"], pos=place)
     tl.add(DURATIONS["open"], hand=side["open"])
     tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * UP)
+    if rise_to > tl.frames[-1].pos[2]:
+        tl.add(DURATIONS["lift"], pos=np.array([*tl.frames[-1].pos[:2], rise_to]))
     carried_at = tl.frames[first - 1].end_step
     side["corrections"].append((carried_at, name, offset, slice(first, len(tl.frames))))
 
@@ -198,7 +202,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     lifted = tl.frames[-1]
     lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, offset))])
     place = place_centre(op, data, item, item["pick"]) - offset
-    op.planned_pos[item["pick"]], op.planned_on[item["pick"]] = place + offset, item["place"]
+    op.leaves(item["pick"], place + offset, on=item["place"])
     carry = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(item["pick"], offset))
     lower_and_release(op, item, item["pick"], offset, place)

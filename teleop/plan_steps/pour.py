@@ -23,7 +23,7 @@ import numpy as np
 from evaluation.geometry import axis_extent
 from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, TABLE_TARGET
 from sim.scene.reach import PALM_DOWN
-from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, UP, SideTimeline, axis_rotation, quat
+from teleop.operator_motion import LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.pick_place import RELEASE_GAP_M, grasp_and_lift, lower_and_release, place_centre
 from teleop.transit import CLEARANCE_M, hand_outline
 
@@ -37,7 +37,6 @@ BOTTOM_ABOVE_RIM_M = 0.04     # carried upright over the target, the pourer's bo
 RIM_INSET_M = 0.03            # the aim stays this far inside a container's cavity walls
 TILT_STEP_DEG = 1.0           # resolution of the turn that reaches the wanted tilt
 SIDE_GRASP_ROLL_DEG = 90.0    # `grasp: side`: the right hand palm towards the body's midline, thumb up
-SLIPPED_OUT_M = 0.05          # the pourer this much further from the wrist than held: it is not in the hand
 POUR_DURATIONS = {"to_target": 70, "tilt": 70, "pour": 70, "untilt": 70, "back": 120}
 
 
@@ -159,17 +158,14 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     # back down where it came from, or at place_offset of the table
     spot = {"place": TABLE_TARGET, "place_offset": list(item.get("place_offset", start[:2]))}
     place = place_centre(op, data, spot, name) - offset
-    op.planned_pos[name] = place + offset
+    op.leaves(name, place + offset)
     tl.add(POUR_DURATIONS["back"], pos=place + LIFT_HEIGHT_M * UP)
-    lower_and_release(op, item, name, offset, place)
     # the open hand rises clear of the bottle's top before it moves away: held from the side, the
     # hand is beside the bottle and lower than its top, and a move across would sweep it over
     lowest = float(np.min((hand_outline(side["hand"], item["hand"], side["open"]) @ hand_rot.T)[:, 2]))
     top = place[2] + offset[2] + float(obj.half_extents[2])
-    clear = top + CLEARANCE_M - lowest
-    if clear > tl.frames[-1].pos[2]:
-        tl.add(DURATIONS["lift"], pos=np.array([*tl.frames[-1].pos[:2], clear]))
-    op.look_at(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
+    lower_and_release(op, item, name, offset, place, rise_to=top + CLEARANCE_M - lowest)
+    op.on_frame_end(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
                                                range(untilted + 1, len(tl.frames))))
 
 
@@ -184,12 +180,12 @@ def upright_in_hand(op: ScriptedOperator, side: dict, name: str, axis_local: np.
         wrist_rot = data.site_xmat[side["wrist_site_id"]].reshape(3, 3)
         in_hand = wrist_rot.T @ data.xmat[body].reshape(3, 3)
         at = wrist_rot.T @ (data.xpos[body] - data.site_xpos[side["wrist_site_id"]])
-        if np.linalg.norm(at) > np.linalg.norm(offset) + SLIPPED_OUT_M:      # not in the hand any more
+        if np.linalg.norm(at) > np.linalg.norm(offset) + NOT_IN_HAND_M:      # not in the hand any more
             return
         up = hand_rot @ in_hand @ axis_local                # where the mouth would point, hand level
         turn = np.cross(up, UP)
         angle = float(np.arctan2(np.linalg.norm(turn), up @ UP))
-        if angle < 1e-6:
+        if angle < 1e-6 or np.linalg.norm(turn) < 1e-9:      # upright, or upside down: no axis to turn about
             return
         rot = axis_rotation(turn / np.linalg.norm(turn), angle) @ hand_rot
         moved = offset - rot @ at           # each keyframe was the wrist for `offset`; now for the new hold

@@ -39,9 +39,9 @@ RELEASE_STEPS = 15           # back up to the hover height; the key's spring ret
 
 
 def _index_finger(hand_name: str) -> tuple[int, str]:
-    """Row (in ``fingertips_in_site_frame``) and finger name of the pointing finger: the first
-    finger that is not the thumb, found by the keypoint its retarget point follows."""
-    row = fingertip_rows(hand_name)[0]
+    """Row (in ``fingertips_in_site_frame``) and finger name of the pointing finger: the one whose
+    retarget point follows the index fingertip."""
+    [row] = fingertip_rows(hand_name, ("index_tip",))
     return row, hand_kinematics(hand_name).spec.fingertips[row].finger
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from sim.demo_plan import TABLE_TARGET
 from sim.physics import CONTROL_HZ
-from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, UP, SideTimeline
+from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, SMOOTHSTEP_PEAK, UP, SideTimeline
 from teleop.plan_steps.pick_place import carry_height, grasp_and_lift, lower_and_release, place_centre
 
 if TYPE_CHECKING:
@@ -27,7 +27,6 @@ if TYPE_CHECKING:
 STRIKE_RISE_M = 0.08          # the strike point this far above the target's top before the swing
 STRIKE_FOLLOW_M = 0.08        # ... aimed this far below it: contact comes mid-swing, at full speed
 STRIKE_PEAK_SPEED_M_S = 1.6   # the swing's peak (a tap; the arm lags its target, the evaluator wants ~1)
-SMOOTHSTEP_PEAK = 1.5         # a smoothstep segment's peak speed over its mean
 
 
 def swing_steps(distance: float) -> int:
@@ -64,7 +63,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     up = tl.frames[-1]
     up.pos = np.array([*up.pos[:2], max(up.pos[2], carry_height(op, data, {**item, "pick": tool}, offset))])
     place = place_centre(op, data, item, tool) - offset
-    op.planned_pos[tool], op.planned_on[tool] = place + offset, item["place"]
+    op.leaves(tool, place + offset, on=item["place"])
     carry = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(tool, offset))
     lower_and_release(op, item, tool, offset, place)

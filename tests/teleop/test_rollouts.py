@@ -20,4 +20,10 @@ def test_rollouts_are_labelled_rows_at_their_own_seeds(operator):
     assert [r["episode"] for r in rows] == [0, 1]
     assert [r["seed"] for r in rows] == [rollout_seed(SETTING[0], "inv_equi", i) for i in range(2)]
     assert all(r["termination"] != "error" and r["anchor"] is None and not r["success"] for r in rows)
+    assert {r["operator"] for r in rows} == {operator}
+
+
+def test_by_default_the_scripted_operator_rolls_out_through_the_stream_interface():
+    rows = run_rollouts(*SETTING, "inv_equi", [], 1, max_steps=5)
+    assert rows[0]["operator"] == "stream" and rows[0]["policy"] == "scripted_operator"
 
