@@ -14,15 +14,15 @@ from teleop.recorder import record_episode
 # (task, paper embodiment, demonstration episode index that succeeds). citrus_plate_loading is
 # guarded by tests/test_scripted_operator.py.
 SETTINGS = [
-    ("ball_box_loading", "ur5_wuji", 0),
+    ("ball_box_loading", "ur5_wuji", 11),
     ("bimanual_piano_melody", "xarm7_ability", 0),
-    ("breadbasket_fast_food_loading", "ur5_rh5dg2", 0),
+    ("breadbasket_fast_food_loading", "ur5_rh5dg2", 11),
     ("canned_food_tray_arrangement", "iiwa7_sharpa", 11),
     ("condiment_box_loading", "ur5_wuji", 0),
     ("fruit_bowl_loading", "ur5_rh56dfx", 7),
     ("frypan_stand_pour", "ur5_schunk", 0),
-    ("gaming_desk_setup", "jaka_zu7_dexhand021", 0),
-    ("medicine_shoebox_pack", "panda_orca", 0),
+    ("gaming_desk_setup", "jaka_zu7_dexhand021", 1),
+    ("medicine_shoebox_pack", "panda_orca", 4),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("trash_disposal", "ur5_rh56dfx", 1),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
