@@ -49,7 +49,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     # `offset` from the wrist and keeps the orientation it lay in, so its strike point sits `head`
     offset = grasp_and_lift(op, data, item, tool)
     head = offset + body_rot @ strike_point(item)
-    top = op.object_pos(data, target)
+    top = op.planned_place(data, target, tl.end)[0].copy()     # where earlier steps leave it
     top[2] += task.objects[target].half_extents[2]
     ready = top + STRIKE_RISE_M * UP - head
     first = len(tl.frames)

@@ -51,14 +51,16 @@ def test_check_accepts_a_strike():
     assert _check(grasp="power", grasp_point=[-0.045, 0.0, 0.0], place="box")[0]["tool"] == "screwdriver_left"
 
 
-def _scene():
-    """The task's scene with only the strike: the plan is the step, the evaluator its struck_once."""
+def _scene(before=()):
+    """The task's scene with only the strike (after the steps ``before``): the evaluator its struck_once."""
     spec = load_task(TASK)
     stage = next(s for s in spec.metrics["stages"] if s["id"] == "block_struck")
     struck = {**stage["predicate"]["struck_once"], "tool": STEP["tool"], "head_offset": STEP["strike_point"]}
     metrics = {**spec.metrics, "stages": [{"id": "block_struck", "predicate": {"struck_once": struck}}],
                "terminal": {"latched": "block_struck"}}
-    spec = dataclasses.replace(spec, metrics=metrics, demo_plan=_check())
+    plan = parse_plan("t.yaml", {"demo_plan": [*before, {**STEP, "after": list(range(len(before)))}]},
+                      PlanScope(spec.objects, spec.zones, spec.points))
+    spec = dataclasses.replace(spec, metrics=metrics, demo_plan=plan)
     scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
     data = home(scene)
     op = ScriptedOperator()
@@ -82,6 +84,16 @@ def test_swing_is_fast_enough_and_comes_back_up():
     peak = 1.5 * (STRIKE_RISE_M + STRIKE_FOLLOW_M) / steps * physics.CONTROL_HZ    # smoothstep's peak
     assert peak >= 1.5 * MIN_SPEED_M_S                # headroom for the arm's lag
     assert np.allclose(frames[i + 1].pos, frames[i - 1].pos)          # back up to where it swung from
+
+
+def test_the_swing_aims_where_an_earlier_step_leaves_the_target():
+    spot = [0.1, -0.2]
+    moved = ({"hand": "right", "pick": "wood_block", "place": "table", "place_offset": spot},)
+    (scene, data, op), (_, _, op_moved) = _scene(), _scene(moved)
+    block = data.xpos[scene.object_body_ids["wood_block"]]
+    ready, ready_moved = (o.sides["left"]["timeline"].frames[_swing(o.sides["left"]["timeline"].frames) - 1].pos
+                          for o in (op, op_moved))
+    assert np.allclose(ready_moved[:2] - ready[:2], np.array(spot) - block[:2], atol=1e-6)
 
 
 def test_episode_strikes_the_block_once():
