@@ -98,12 +98,25 @@ def bench_recorder(steps: int) -> dict:
 def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
     """Frames per second per core through replay -> render -> assemble, the share of time in each
     part of the work (physics, each camera modality, tactile, posing, writing), bytes per frame on
-    disk per modality; with `workers` > 1 also the render's wall-clock speed-up over one worker."""
+    disk per modality; with `workers` > 1 also the render's wall-clock speed-up over one worker.
+    OpenCV (segment lookups, the tactile blur) runs on one thread meanwhile, as the figures are per core."""
+    import cv2
+
+    threads = cv2.getNumThreads()
+    cv2.setNumThreads(1)
+    try:
+        return _bench_replay(profile_name, steps, workers)
+    finally:
+        cv2.setNumThreads(threads)
+
+
+def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
     profile = sensor_profile(profile_name)
     clock = time.perf_counter
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         raw = record_demonstrations(TASK, EMBODIMENT, 1, tmp, max_steps=steps)[0].path
+        cpu0 = time.process_time()      # every thread of this process
         t0 = clock()
         replay_to_file(raw, tmp / "e.replay.h5")
         t1 = clock()
@@ -111,6 +124,7 @@ def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
         t2 = clock()
         out = assemble_episode(tmp / "e.replay.h5", tmp / "e.render.h5", profile, tmp / "episode_e.hdf5")
         t3 = clock()
+        cpu = time.process_time() - cpu0
         stored = _bytes_by_modality(tmp / "episode_e.hdf5")
         parallel = {}
         if workers > 1:
@@ -135,6 +149,9 @@ def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
             "frames_per_second_per_core": round(frames / per_frame, 3),
             "frames_per_second_per_core_with_setup": round(frames / total, 3),
             "seconds": round(total, 3),
+            "cpu_seconds_per_wall_second": round(cpu / total, 3),
+            "llvmpipe_threads": os.environ.get("LP_NUM_THREADS", "one per core (Mesa's default)"),
+            "opencv_threads": 1,
             "share": {k: round(v / per_frame, 4) for k, v in parts.items()},
             "ms_per_frame": {k: round(1e3 * v / max(frames, 1), 3) for k, v in parts.items()},
             "unavoidable_render_and_raycast_share": round(unavoidable / per_frame, 4),
@@ -143,7 +160,8 @@ def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
             "bytes_per_frame_on_disk": round(out["bytes"] / max(frames, 1)),
             "bytes_per_frame_by_modality": {k: round(v / max(frames, 1)) for k, v in stored.items()},
             **({"parallel_render": parallel} if parallel else {}),
-            "note": (f"scripted {TASK} on {EMBODIMENT}, one core; shares and ms_per_frame are the run's time "
+            "note": (f"scripted {TASK} on {EMBODIMENT}, one core (cpu_seconds_per_wall_second ~1: no other thread "
+                     "worked; llvmpipe_threads 0 = software GL on the calling thread); shares and ms_per_frame are the run's time "
                      "less the render set-up, so the replay's and the assembly's own one-off costs (scene build, "
                      "opening files) are still in physics_replay and assemble_write; render_setup (scene build, label and tactile set-up, once per render file) is "
                      "reported apart in one_off_per_render_file_ms and, spread over this run's frames, in the "

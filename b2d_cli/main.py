@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -185,6 +186,11 @@ def validate(episode) -> None:
               help="demos: the scripted operator through the teleop stream, or its direct joint path.")
 def bench(part, profile, steps, workers, episodes, setting, operator) -> None:
     """Print benchmark figures as JSON on stdout."""
+    # Per-core figures: Mesa's software GL (llvmpipe) rasterizes on one thread per core by default, so a
+    # "one core" render also used the other cores (b2d bench replay --profile paper: 5.6 fps "per core"
+    # that way, 4.9 on one). 0 = on the calling thread. Read when the first GL context is made, which is
+    # after this; a GPU driver ignores it; an LP_NUM_THREADS already set is kept.
+    os.environ.setdefault("LP_NUM_THREADS", "0")
     if part == "demos":
         from teleop.demo_bench import run_demo_bench
         figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator)

@@ -3,7 +3,8 @@
 Per-frame datasets (extendable along axis 0, as `EpisodeWriter` makes them) are concatenated; the
 rest (intrinsics, surface maps, names) is the same in every part and copied once. Image chunks hold
 one frame, so they are copied as compressed bytes (`read_direct_chunk`), never decoded and
-recompressed: joining costs little next to rendering. The joined datasets keep each part's chunking
+recompressed: joining costs little next to rendering. Frames the writer left unallocated (all zero)
+stay so. The joined datasets keep each part's chunking
 and filter pipeline (plugin filters included).
 """
 
@@ -92,10 +93,11 @@ def _concat(out: h5py.File, name: str, sources: list[h5py.Dataset]) -> None:
     for s in sources:
         n = s.shape[0]
         if one_frame_chunks and s.chunks == src.chunks and _filters(s) == _filters(src):
-            tail = (0,) * (len(s.shape) - 1)
-            for i in range(n):
-                mask, chunk = s.id.read_direct_chunk((i, *tail))
-                dst.id.write_direct_chunk((start + i, *tail), chunk, mask)
+            # the allocated chunks only: a frame the writer did not store (all zero) reads as the fill value
+            for k in range(s.id.get_num_chunks()):
+                offset = s.id.get_chunk_info(k).chunk_offset
+                mask, chunk = s.id.read_direct_chunk(offset)
+                dst.id.write_direct_chunk((start + offset[0], *offset[1:]), chunk, mask)
         else:
             dst[start:start + n] = s[()] if n else np.empty((0, *s.shape[1:]), s.dtype)
         start += n

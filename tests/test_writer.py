@@ -160,3 +160,26 @@ def test_a_frame_of_another_dtype_is_converted_by_hdf5_as_for_camera_images(tmp_
         np.testing.assert_array_equal(f["mask"][1], expected)
         assert f["mask"][1, 0, :4].tolist() == [0, 2, 255, 255]
 
+
+
+def test_all_zero_frames_are_not_stored_and_read_back_as_zeros_also_after_a_join(tmp_path):
+    """A tactile site out of contact or an empty mask is a frame of zero bytes: its chunk is left
+    unallocated (no compression, no space) and reads back as zeros; a join keeps it so. -0.0 is not
+    zero bytes and is stored."""
+    from episodes.h5_concat import concat_frames
+
+    ones, negative_zero = np.ones((64, 64), np.float32), np.full((64, 64), -0.0, np.float32)
+    zeros, contact = np.zeros((64, 64), np.float32), np.zeros((64, 64), np.float32)
+    contact[63, 63] = 1e-3                        # one pixel, the last: the check reads past the first byte
+    frames = [zeros, ones, zeros, negative_zero, contact, zeros]
+    for name, part in (("a.h5", frames[:3]), ("b.h5", frames[3:])):
+        with EpisodeWriter(tmp_path / name, {}) as w:
+            for image in part:
+                w.append({"tactile": image, "mask": (image != 0).astype(np.uint8)})
+    concat_frames([tmp_path / "a.h5", tmp_path / "b.h5"], tmp_path / "joined.h5")
+    with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "joined.h5") as f:
+        assert a["tactile"].id.get_num_chunks() == 1
+        stored = [f["tactile"].id.get_chunk_info(i).chunk_offset[0] for i in range(f["tactile"].id.get_num_chunks())]
+        assert stored == [1, 3, 4] and f["mask"].id.get_num_chunks() == 2
+        assert f["tactile"][()].tobytes() == np.stack(frames).tobytes()      # -0.0 kept bit for bit
+        np.testing.assert_array_equal(f["mask"][()], np.stack([fr != 0 for fr in frames]).astype(np.uint8))

@@ -29,7 +29,6 @@ from sim.render import MJ_TO_CV, intrinsic_matrix
 
 SAMPLES_PER_OBJECT = 256
 SAMPLE_SEED = 0
-_NEIGHBOURS = np.array([(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)])
 
 
 @dataclass(frozen=True)
@@ -42,31 +41,30 @@ class Boxes2D:
 def mask_boxes(instance: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
     """xyxy [count, 4] (NaN when absent) and pixel counts [count] of instances 1..count.
 
-    Objects cover a few percent of an image: the rows and columns showing any object bound a crop,
-    and only the crop's object pixels are visited. Counts of (instance, row) and (instance, column)
-    pairs give each instance's occupied rows and columns."""
+    Objects cover a few percent of an image: one pass finds the object pixels (on a boolean mask,
+    whose nonzero search is several times faster than a uint16 one), and only those are visited.
+    Counts of (instance, row) and (instance, column) pairs give each instance's occupied rows and
+    columns."""
     xyxy = np.full((count, 4), np.nan, np.float32)
-    any_rows = np.flatnonzero(instance.any(axis=1))
-    if not any_rows.size:
+    height, width = instance.shape
+    flat = instance.ravel()
+    where = np.flatnonzero(flat != 0)
+    if not where.size:
         return xyxy, np.zeros(count, np.int64)
-    any_cols = np.flatnonzero(instance.any(axis=0))
-    top, left = any_rows[0], any_cols[0]
-    crop = instance[top: any_rows[-1] + 1, left: any_cols[-1] + 1]
-    height, width = crop.shape
-    where = np.flatnonzero(crop)
-    labels = crop.ravel()[where].astype(np.intp)
+    labels = flat[where].astype(np.intp)
     if labels.max() > count:
         raise ValueError(f"instance mask: id {int(labels.max())} above the {count} objects")
-    rows, cols = np.divmod(where, width)
+    rows = where // width
+    cols = where - rows * width
     in_row = np.bincount(labels * height + rows, minlength=(count + 1) * height).reshape(count + 1, height)[1:] > 0
     in_col = np.bincount(labels * width + cols, minlength=(count + 1) * width).reshape(count + 1, width)[1:] > 0
     pixels = np.bincount(labels, minlength=count + 1)[1:]
     seen = pixels > 0
     # first occupied column / row, and last + 1 (argmax finds the first True)
-    xyxy[seen, 0] = left + in_col[seen].argmax(axis=1)
-    xyxy[seen, 1] = top + in_row[seen].argmax(axis=1)
-    xyxy[seen, 2] = left + width - in_col[seen, ::-1].argmax(axis=1)
-    xyxy[seen, 3] = top + height - in_row[seen, ::-1].argmax(axis=1)
+    xyxy[seen, 0] = in_col[seen].argmax(axis=1)
+    xyxy[seen, 1] = in_row[seen].argmax(axis=1)
+    xyxy[seen, 2] = width - in_col[seen, ::-1].argmax(axis=1)
+    xyxy[seen, 3] = height - in_row[seen, ::-1].argmax(axis=1)
     return xyxy, pixels.astype(np.int64)
 
 
@@ -100,10 +98,21 @@ class SurfaceSamples:
         self.instance = np.concatenate(owner) if owner else np.zeros(0, int)
         self.count = len(ids.instance_names) - 1
         self.per_object = per_object
+        self._geoms = np.unique(self.geom)
+        self._last = None       # (geom poses, points) of the last world() call
 
     def world(self, data: mujoco.MjData) -> np.ndarray:
+        """[N, 3] world points (read-only). Every camera of a frame asks for the same points: they are
+        recomputed only when the sampled geoms' poses changed (compared bit for bit)."""
+        pose = np.concatenate([data.geom_xpos[self._geoms].ravel(), data.geom_xmat[self._geoms].ravel()])
+        last = self._last
+        if last is not None and np.array_equal(pose.view(np.int64), last[0].view(np.int64)):
+            return last[1]
         rot = data.geom_xmat[self.geom].reshape(-1, 3, 3)
-        return data.geom_xpos[self.geom] + np.einsum("nij,nj->ni", rot, self.local)
+        points = data.geom_xpos[self.geom] + np.einsum("nij,nj->ni", rot, self.local)
+        points.flags.writeable = False
+        self._last = pose, points
+        return points
 
 
 class Box2DLabeler:
@@ -127,12 +136,16 @@ class Box2DLabeler:
         safe_z = np.where(ahead, z, 1.0)
         u = np.floor(K[0, 0] * pc[:, 0] / safe_z + K[0, 2]).astype(np.int64)
         v = np.floor(K[1, 1] * pc[:, 1] / safe_z + K[1, 2]).astype(np.int64)
-        inside = ahead & (u >= 0) & (u < width) & (v >= 0) & (v < height)
-        seen = np.zeros(len(z), bool)
-        inst = self.samples.instance
-        for du, dv in _NEIGHBOURS:
-            uu, vv = np.clip(u + du, 0, width - 1), np.clip(v + dv, 0, height - 1)
-            seen |= instance[vv, uu] == inst
-        seen &= inside
+        inside = np.flatnonzero(ahead & (u >= 0) & (u < width) & (v >= 0) & (v < height))
+        u, v, inst = u[inside], v[inside], self.samples.instance[inside]
+        # the sample's pixel and its 4 neighbours as flat indices; past the border a neighbour is the
+        # pixel itself (as clipping it to the image would give)
+        flat = instance.ravel()
+        pixel = v * width + u
+        seen = flat[pixel] == inst
+        seen |= flat[pixel + (u < width - 1)] == inst
+        seen |= flat[pixel - (u > 0)] == inst
+        seen |= flat[pixel + width * (v < height - 1)] == inst
+        seen |= flat[pixel - width * (v > 0)] == inst
         fraction = np.bincount(inst[seen], minlength=n + 1)[1:] / float(self.samples.per_object)
         return Boxes2D(xyxy, fraction.astype(np.float32), pixels)

@@ -23,9 +23,29 @@ BOX, SPHERE, ELLIPSOID, CYLINDER, CAPSULE, MESH, PLANE = (int(G.mjGEOM_BOX), int
                                                           int(G.mjGEOM_ELLIPSOID), int(G.mjGEOM_CYLINDER),
                                                           int(G.mjGEOM_CAPSULE), int(G.mjGEOM_MESH),
                                                           int(G.mjGEOM_PLANE))
-SOLID_TYPES = (BOX, SPHERE, ELLIPSOID, CYLINDER, CAPSULE, MESH)
+PRIMITIVE_TYPES = (BOX, SPHERE, ELLIPSOID, CYLINDER, CAPSULE)
+SOLID_TYPES = PRIMITIVE_TYPES + (MESH,)
 HULL_TOLERANCE = 1e-9
 SURFACE_SECTIONS = 24     # facets round cylinders and capsules for surface samples
+
+
+def primitive_contains(kind: int, size: np.ndarray, x, y, z) -> np.ndarray:
+    """Whether points with local coordinates (x, y, z) are inside or on a primitive of type `kind`:
+    `size` is one geom's [3] (MuJoCo half sizes) or [3, N], a size per point (points of several geoms
+    of that type tested at once)."""
+    s0, s1, s2 = size
+    if kind == BOX:
+        return (np.abs(x) <= s0) & (np.abs(y) <= s1) & (np.abs(z) <= s2)
+    if kind == SPHERE:
+        return x * x + y * y + z * z <= s0 * s0
+    if kind == ELLIPSOID:
+        return (x / s0) ** 2 + (y / s1) ** 2 + (z / s2) ** 2 <= 1.0
+    if kind == CYLINDER:
+        return (x * x + y * y <= s0 * s0) & (np.abs(z) <= s1)
+    if kind == CAPSULE:
+        beyond = np.maximum(np.abs(z) - s1, 0.0)      # distance past the segment's end along z
+        return x * x + y * y + beyond * beyond <= s0 * s0
+    raise ValueError(f"geom type {kind} is not a primitive")
 
 
 def check_solid(model: mujoco.MjModel, geoms) -> None:
@@ -113,21 +133,12 @@ class GeomShapes:
 
     def contains(self, g: int, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
         """Whether points with local coordinates (x, y, z) (arrays of one shape) are inside or on geom g."""
-        kind, s = self.type[g], self.size[g]
-        if kind == BOX:
-            return (np.abs(x) <= s[0]) & (np.abs(y) <= s[1]) & (np.abs(z) <= s[2])
-        if kind == SPHERE:
-            return x * x + y * y + z * z <= s[0] * s[0]
-        if kind == ELLIPSOID:
-            return (x / s[0]) ** 2 + (y / s[1]) ** 2 + (z / s[2]) ** 2 <= 1.0
-        if kind == CYLINDER:
-            return (x * x + y * y <= s[0] * s[0]) & (np.abs(z) <= s[1])
-        if kind == CAPSULE:
-            beyond = np.maximum(np.abs(z) - s[1], 0.0)      # distance past the segment's end along z
-            return x * x + y * y + beyond * beyond <= s[0] * s[0]
+        kind = self.type[g]
         if kind == MESH:
             points = np.stack([np.ravel(x), np.ravel(y), np.ravel(z)], axis=1)
             return self.mesh(g).contains(points).reshape(np.shape(x))
+        if kind in PRIMITIVE_TYPES:
+            return primitive_contains(kind, self.size[g], x, y, z)
         check_solid(self.model, [g])
         raise AssertionError("unreachable")
 

@@ -10,10 +10,11 @@ class order: base, left arm, left hand, right arm, right hand). Only labelled ge
 (objects, robot, table); planes are infinite half-spaces and are left out, like everything of the
 world body (floor).
 
-Speed: per frame, each geom's world bounds select the block of voxel centres it can contain; the
-block's local coordinates are outer sums of three axis vectors and its result is merged into the grid
-in place (no per-voxel index arrays). Geoms welded to the world (the table, the
-robot torso, fixed object bases) are filled once from the model and copied per frame.
+Speed: the geoms welded to the world (the table, the robot torso, fixed object bases) are filled
+once from the model; their semantic and instance grids are copied per frame. Per frame, each moving
+geom's world bounds select the block of voxel centres it can contain; the blocks of all moving geoms
+are tested in one batch (one vectorised containment test per primitive type, one per mesh geom), and
+only the voxels found inside are merged with the static keys and written to the copies.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from sim.labels.geometry import PLANE, GeomShapes, check_solid
+from sim.labels.geometry import MESH, PLANE, GeomShapes, check_solid, primitive_contains
 from sim.labels.grid import grid_shape
 from sim.labels.ids import LabelIds
 
@@ -37,7 +38,8 @@ class Occupancy:
 
 
 class OccupancyLabeler:
-    """``capture(data)`` -> `Occupancy` of the posed scene."""
+    """``capture(data)`` -> `Occupancy` of the posed scene. Holds per-frame scratch memory: use one
+    labeler per thread."""
 
     def __init__(self, model: mujoco.MjModel, ids: LabelIds, bounds, voxel_size: float,
                  shapes: GeomShapes | None = None):
@@ -54,17 +56,31 @@ class OccupancyLabeler:
         self.dynamic = labelled[~welded]
         rest = mujoco.MjData(model)
         mujoco.mj_kinematics(model, rest)     # world-welded geoms sit where the model puts them
-        self._static = np.zeros(self.shape, np.uint32)
-        self._fill(self._static, labelled[welded], rest)
+        self._static = np.zeros(int(np.prod(self.shape)), np.uint32)      # flat keys
+        for g in labelled[welded]:            # one geom at a time: a block's arrays at most in memory
+            np.maximum.at(self._static, *self._inside(np.array([g]), rest))
+        self._semantic, self._instance = _split(self._static)
+        self._merged = np.zeros_like(self._static)    # scratch, all zero between captures
 
     def capture(self, data: mujoco.MjData) -> Occupancy:
-        keys = self._static.copy()
-        self._fill(keys, self.dynamic, data)
-        return Occupancy((keys >> 16).astype(np.uint8), (keys & 0xFFFF).astype(np.uint16))
+        semantic, instance = self._semantic.copy(), self._instance.copy()
+        voxels, keys = self._inside(self.dynamic, data)
+        if voxels.size:
+            merged = self._merged
+            try:                # the maximum over the geoms covering each voxel, then over the static key
+                np.maximum.at(merged, voxels, keys)
+                keys = np.maximum(merged[voxels], self._static[voxels])
+            finally:
+                merged[voxels] = 0
+            semantic[voxels], instance[voxels] = _split(keys)
+        return Occupancy(semantic.reshape(self.shape), instance.reshape(self.shape))
 
-    def _fill(self, keys: np.ndarray, geoms: np.ndarray, data: mujoco.MjData) -> None:
+    def _inside(self, geoms: np.ndarray, data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """Flat indices of the voxels whose centre lies inside one of `geoms` (posed as in `data`),
+        with that geom's key; a voxel inside several geoms appears once per geom."""
+        none = np.zeros(0, np.int64), np.zeros(0, np.uint32)
         if not len(geoms):
-            return
+            return none
         rot = data.geom_xmat[geoms].reshape(-1, 3, 3)
         pos = data.geom_xpos[geoms]
         lo, hi = self.shapes.bounds(geoms, rot, pos)
@@ -72,16 +88,51 @@ class OccupancyLabeler:
         # voxels whose centre lies within the geom's bounds: first index with centre >= lo, last + 1
         first = np.clip(np.ceil((lo - origin) / v - 0.5), 0, shape).astype(np.int64)
         stop = np.clip(np.floor((hi - origin) / v - 0.5) + 1, 0, shape).astype(np.int64)
-        for k in np.flatnonzero(np.all(stop > first, axis=1)):
-            (i0, j0, k0), (i1, j1, k1) = first[k], stop[k]
-            # the block's centres relative to the geom, along each world axis, then in its local frame
-            # by broadcasting: local = R^T (p - x), one outer sum per local axis
-            dx = origin[0] + (np.arange(i0, i1) + 0.5) * v - pos[k, 0]
-            dy = origin[1] + (np.arange(j0, j1) + 0.5) * v - pos[k, 1]
-            dz = origin[2] + (np.arange(k0, k1) + 0.5) * v - pos[k, 2]
-            R = rot[k]
-            x, y, z = (R[0, a] * dx[:, None, None] + R[1, a] * dy[None, :, None] + R[2, a] * dz[None, None, :]
-                       for a in range(3))
-            inside = self.shapes.contains(int(geoms[k]), x, y, z)
-            block = keys[i0:i1, j0:j1, k0:k1]
-            np.maximum(block, np.where(inside, self.key[geoms[k]], 0).astype(np.uint32), out=block)
+        extent = np.maximum(stop - first, 0)
+        # the non-empty blocks, grouped by geom type: each primitive type is one run of points
+        kind = self.shapes.type[geoms]
+        blocks = np.flatnonzero(extent.prod(axis=1))
+        if not len(blocks):
+            return none
+        blocks = blocks[np.argsort(kind[blocks], kind="stable")]
+        geoms, kind, rot, pos, first, extent = (a[blocks] for a in (geoms, kind, rot, pos, first, extent))
+        # all blocks' voxels as 1-D arrays, in C order within each block (as a block array would be):
+        # first the rows (i, j) of every block, then the voxels k of every row
+        count = extent.prod(axis=1)
+        rows = extent[:, 0] * extent[:, 1]
+        row_owner = np.repeat(np.arange(len(blocks)), rows)
+        place = np.arange(rows.sum()) - np.repeat(np.cumsum(rows) - rows, rows)
+        i = place // extent[row_owner, 1] + first[row_owner, 0]
+        j = place % extent[row_owner, 1] + first[row_owner, 1]
+        depth = extent[row_owner, 2]
+        k = np.arange(count.sum()) - np.repeat(np.cumsum(depth) - depth, depth)
+        voxels = np.repeat((i * self.shape[1] + j) * self.shape[2] + first[row_owner, 2], depth) + k
+        k += np.repeat(first[:, 2], count)
+        # centres relative to the geom, then in its local frame: local_a = R[0, a] dx + R[1, a] dy +
+        # R[2, a] dz, always summed left to right (a voxel gets the same floats in any batch); the
+        # first two terms are per row
+        dx = origin[0] + (i + 0.5) * v - pos[row_owner, 0]
+        dy = origin[1] + (j + 0.5) * v - pos[row_owner, 1]
+        dz = origin[2] + (k + 0.5) * v - np.repeat(pos[:, 2], count)
+        row_rot = rot[row_owner]
+        x, y, z = (np.repeat(row_rot[:, 0, a] * dx + row_rot[:, 1, a] * dy, depth)
+                   + np.repeat(rot[:, 2, a], count) * dz for a in range(3))
+        inside = np.empty(len(voxels), bool)
+        ends = np.cumsum(count)
+        starts = ends - count
+        for t in np.unique(kind):
+            members = np.flatnonzero(kind == t)
+            if t == MESH:       # one hull (or mesh) per geom
+                for b in members:
+                    run = slice(starts[b], ends[b])
+                    inside[run] = self.shapes.contains(int(geoms[b]), x[run], y[run], z[run])
+            else:               # consecutive blocks: one test, with a size column per point
+                run = slice(starts[members[0]], ends[members[-1]])
+                size = np.repeat(self.shapes.size[geoms[members]].T, count[members], axis=1)
+                inside[run] = primitive_contains(int(t), size, x[run], y[run], z[run])
+        return voxels[inside], np.repeat(self.key[geoms], count)[inside]
+
+
+def _split(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Semantic (uint8) and instance (uint16) ids of keys."""
+    return (keys >> 16).astype(np.uint8), (keys & 0xFFFF).astype(np.uint16)
