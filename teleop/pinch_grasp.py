@@ -40,18 +40,13 @@ class PinchGrasp:
     fingers: tuple[str, ...]    # the fingers the thumb pinches against
 
 
-def _fingertip_rows(kin: HandKinematics, fingers: tuple[str, ...]) -> tuple[int, list[int]]:
-    """Rows of ``kin.points`` (row 0 is the wrist point) of the thumb and of ``fingers``, found by the
-    MediaPipe keypoint each retarget point follows (the spec guarantees those, not finger names)."""
-    keypoints = [t.keypoint for t in kin.spec.fingertips]
-    rows = {}
-    for finger in ("thumb", *fingers):
-        keypoint = f"{'pinky' if finger == 'little' else finger}_tip"
-        if keypoint not in keypoints:
-            raise DescriptionError(f"{kin.hand.path}: field 'retarget.fingertips': a pinch needs a point that "
-                                   f"follows {keypoint!r}; the hand has {keypoints}")
-        rows[finger] = 1 + keypoints.index(keypoint)
-    return rows["thumb"], [rows[f] for f in fingers]
+def pinch_rows(hand_name: str, fingers: tuple[str, ...]) -> tuple[int, list[int]]:
+    """Rows of ``HandKinematics.points`` (row 0 is the wrist point, then ``fingertips_in_site_frame``'s
+    rows) of the thumb pad and of ``fingers``' pads, found by the MediaPipe keypoint each retarget point
+    follows (the spec guarantees those, not finger names)."""
+    keypoints = tuple(f"{'pinky' if finger == 'little' else finger}_tip" for finger in ("thumb", *fingers))
+    thumb, *tips = (1 + row for row in fingertip_rows(hand_name, keypoints))
+    return thumb, tips
 
 
 @functools.lru_cache(maxsize=None)
@@ -68,7 +63,7 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
     """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
     sample (one start gets caught in local minima on the hands with little thumb opposition)."""
     kin = hand_kinematics(hand_name)
-    thumb, tips = _fingertip_rows(kin, fingers)
+    thumb, tips = pinch_rows(hand_name, fingers)
     # actuators that move a pinching pad or the thumb pad solve; the rest fold away
     moving = np.zeros(kin.dof, bool)
     for q in (kin.home, kin.mid):     # a coupling resting on its limit hides a joint at one of them
@@ -120,7 +115,7 @@ def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m
     midway between the thumb pad and the pinching pads there (wrist-site frame, right hand), where
     the object's centre goes so that both sides close in on it together."""
     kin = hand_kinematics(hand_name)
-    thumb, tips = _fingertip_rows(kin, pinch_grasp(hand_name).fingers)
+    thumb, tips = pinch_rows(hand_name, pinch_grasp(hand_name).fingers)
     for s in np.linspace(1.0, 0.0, 21):      # ends at s = 0, the open hand, if nothing is wide enough
         q = open_ + s * (close - open_)
         P = kin.points(q)
@@ -160,7 +155,7 @@ def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
     hand half closed: the direction across which a pinched object must fit."""
     grasp = pinch_grasp(hand_name)
     kin = hand_kinematics(hand_name)
-    thumb, tips = _fingertip_rows(kin, grasp.fingers)
+    thumb, tips = pinch_rows(hand_name, grasp.fingers)
     P = fingertips_in_site_frame(hand_name, 0.5 * (kin.home + grasp.close))
     axis = P[[t - 1 for t in tips]].mean(axis=0) - P[thumb - 1]    # rows of P: fingertips only
     axis /= np.linalg.norm(axis)

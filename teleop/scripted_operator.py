@@ -23,7 +23,7 @@ from sim.scene.builder import Scene
 from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation
 from teleop.pinch_grasp import pinch_grasp
 from teleop.plan_steps import PLANNERS
-from teleop.transit import hand_outline, object_corners, obstacles, transit_height
+from teleop.transit import hand_outline, object_surface, obstacles, transit_height
 
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
@@ -111,8 +111,8 @@ class ScriptedOperator:
         return data.xpos[self.scene.object_body_ids[name]].copy()
 
     def leaves(self, name: str, pos: np.ndarray, on: str | None = None) -> None:
-        """The plan step being planned leaves object ``name`` with its centre at ``pos`` (world) by its
-        end, on or in object ``on`` (None: the table)."""
+        """The plan step being planned leaves object ``name`` at rest with its centre at ``pos`` (world)
+        by its end, on or in object ``on`` (None: the table)."""
         self._leaving.append((name, np.asarray(pos, float).copy(), on))
 
     def planned_place(self, data: mujoco.MjData, name: str, step: int) -> tuple[np.ndarray, str | None]:
@@ -148,7 +148,7 @@ class ScriptedOperator:
         points = None
         if carried is not None:
             name, offset = carried
-            points = object_corners(self.scene.model, data, ids[name]) - data.xpos[ids[name]] + offset
+            points = object_surface(self.scene.model, data, ids[name]) - data.xpos[ids[name]] + offset
         outline = hand_outline(side["hand"], side["name"], last.hand, hand)
         height = transit_height(last.pos, last.quat, np.asarray(pos, float), quat, outline, points, in_way)
         if height is None:

@@ -83,30 +83,64 @@ def _geom_corners(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndar
     return data.geom_xpos[g] + (centre + signs * half) @ R.T
 
 
+def _box_surface(half: np.ndarray, spacing: float) -> np.ndarray:
+    """Points on the surface of a box of half sizes ``half`` (its frame), corners included, at most
+    ``spacing`` apart along each axis."""
+    axes = [np.linspace(-h, h, max(2, int(np.ceil(2 * h / spacing)) + 1)) for h in half]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    return grid[np.any(np.isclose(np.abs(grid), half), axis=1)]
+
+
 def object_geoms(model: mujoco.MjModel, body: int) -> list[int]:
     """The geoms of object ``body`` and of the links attached to it."""
     return [g for g in range(model.ngeom) if model.body_rootid[model.geom_bodyid[g]] == body]
 
 
-def object_corners(model: mujoco.MjModel, data: mujoco.MjData, body: int) -> np.ndarray:
-    """Corners of the bounding boxes of the object's geoms (world, as in ``data``)."""
-    return np.concatenate([_geom_corners(model, data, g) for g in object_geoms(model, body)])
+def object_surface(model: mujoco.MjModel, data: mujoco.MjData, body: int) -> np.ndarray:
+    """Points on the bounding boxes of the object's geoms (world, as in ``data``), corners included and
+    at most 2 SIDE_MARGIN_M apart: a long object carried across a thin one cannot pass it between
+    two points unseen."""
+    points = []
+    for g in object_geoms(model, body):
+        R = data.geom_xmat[g].reshape(3, 3)
+        local = model.geom_aabb[g, :3] + _box_surface(model.geom_aabb[g, 3:], 2 * SIDE_MARGIN_M)
+        points.append(data.geom_xpos[g] + local @ R.T)
+    return np.concatenate(points)
+
+
+def _turns(model: mujoco.MjModel, body: int, turned: dict[int, tuple[np.ndarray, np.ndarray]]) -> list:
+    """The turns (anchor, rotation) that move body ``body``: its own link's and those of the links it
+    hangs from (a door's handle swings with the door), innermost first."""
+    chain = []
+    while body > 0:
+        if body in turned:
+            chain.append(turned[body])
+        body = int(model.body_parentid[body])
+    return chain
+
+
+def _turn_points(points: np.ndarray, chain: list) -> np.ndarray:
+    for anchor, turn in chain:
+        points = anchor + (points - anchor) @ turn.T
+    return points
 
 
 def obstacles(model: mujoco.MjModel, data: mujoco.MjData, name: str, body: int, shift: np.ndarray,
               turned: dict[int, tuple[np.ndarray, np.ndarray]]) -> list[Obstacle]:
     """The geoms of object ``name`` moved by ``shift`` from where ``data`` has them; those of a link
-    body in ``turned`` first turned about its hinge (anchor, rotation: world)."""
+    body in ``turned``, or hanging from one, first turned about the hinges (anchor, rotation: world)."""
     out = []
     for g in object_geoms(model, body):
-        anchor, turn = turned.get(int(model.geom_bodyid[g]), (np.zeros(3), np.eye(3)))
-        corners = anchor + (_geom_corners(model, data, g) - anchor) @ turn.T + shift
-        R = turn @ data.geom_xmat[g].reshape(3, 3)
+        chain = _turns(model, int(model.geom_bodyid[g]), turned)
+        corners = _turn_points(_geom_corners(model, data, g), chain) + shift
+        R = data.geom_xmat[g].reshape(3, 3)
+        for _, turn in chain:
+            R = turn @ R
         round_ = model.geom_type[g] in (mujoco.mjtGeom.mjGEOM_CYLINDER, mujoco.mjtGeom.mjGEOM_SPHERE,
                                         mujoco.mjtGeom.mjGEOM_CAPSULE)
         disc = bool(round_ and abs(R[2, 2]) > 0.99)
         half = model.geom_aabb[g, 3:].copy()
-        centre = anchor + turn @ (data.geom_xpos[g] - anchor) + R @ model.geom_aabb[g, :3] + shift
+        centre = _turn_points(data.geom_xpos[g], chain) + R @ model.geom_aabb[g, :3] + shift
         if disc:
             half[:2] = model.geom_size[g, 0]
         out.append(Obstacle(name, centre, R, half, disc, float(corners[:, 2].max())))

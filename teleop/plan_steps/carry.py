@@ -21,7 +21,7 @@ from sim.embodiment.description import HandDescription, load_embodiment
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, quat, yawed)
-from teleop.plan_steps.pick_place import place_centre
+from teleop.plan_steps.pick_place import place_centre, rest_centre
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
@@ -85,7 +85,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     f = np.array([-a[1], a[0], 0.0])          # the fingers' heading: away from the body
     knuckles = knuckle_reach(load_embodiment(op.scene.layout.embodiment).hand)
     place = place_centre(op, data, item, name)          # the object's centre where it is let go
-    op.leaves(name, place, on=item["place"])
+    op.leaves(name, rest_centre(place), on=item["place"])
     target_top = op.object_pos(data, item["place"])[2] + task.objects[item["place"]].half_extents[2]
     carry_z = target_top + CARRY_CLEARANCE_M + obj.half_extents[2]   # its bottom clears the target's top
     for side_name in ("right", "left"):

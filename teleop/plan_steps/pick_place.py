@@ -166,6 +166,11 @@ def place_centre(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: st
     return np.array([*place_xy, place_z])
 
 
+def rest_centre(release: np.ndarray) -> np.ndarray:
+    """Where an object let go with its centre at ``release`` (``place_centre``) comes to rest."""
+    return release - RELEASE_GAP_M * UP
+
+
 def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray,
                       rise_to: float = -np.inf) -> None:
     """From above ``place`` (the wrist position that lets object ``name`` go where it belongs):
@@ -203,7 +208,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     lifted = tl.frames[-1]
     lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, offset))])
     place = place_centre(op, data, item, item["pick"]) - offset
-    op.leaves(item["pick"], place + offset, on=item["place"])
+    op.leaves(item["pick"], rest_centre(place + offset), on=item["place"])
     carry = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(item["pick"], offset))
     lower_and_release(op, item, item["pick"], offset, place)

@@ -24,7 +24,7 @@ from evaluation.geometry import axis_extent
 from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, TABLE_TARGET
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
-from teleop.plan_steps.pick_place import RELEASE_GAP_M, grasp_and_lift, lower_and_release, place_centre
+from teleop.plan_steps.pick_place import grasp_and_lift, lower_and_release, place_centre, rest_centre
 from teleop.transit import CLEARANCE_M, hand_outline
 
 if TYPE_CHECKING:
@@ -67,19 +67,6 @@ def point_world(op: ScriptedOperator, name: str) -> np.ndarray:
     """A task point in the world: its z is from the table top, as the evaluator resolves it
     (sim/tasks.py task_context: every task point is table-relative)."""
     return np.asarray(op.scene.task.points[name], float) + op.scene.table_height * UP
-
-
-def target_top(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str) -> float:
-    """Height of the target's top when the pour comes: an earlier `pick` of the plan may carry it
-    onto something (the operator re-aims in xy when it sets off, but heights come from the plan)."""
-    obj = op.scene.task.objects[name]
-    z = float(op.object_pos(data, name)[2])
-    for earlier in op.scene.task.demo_plan:
-        if earlier is item:
-            break
-        if earlier.get("pick") == name:
-            z = float(place_centre(op, data, earlier, name)[2]) - RELEASE_GAP_M
-    return z + float(obj.half_extents[2])
 
 
 def tilt_turn(side: dict, hand_rot: np.ndarray, obj_rot: np.ndarray, axis_local: np.ndarray,
@@ -128,7 +115,9 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     hand_rot = hand_rot.reshape(3, 3)
     axis_local = np.asarray(obj.mouth_axis, float) / np.linalg.norm(obj.mouth_axis)
     if target in op.scene.task.objects:
-        top = target_top(op, data, item, target)
+        # the target's top where earlier steps leave it (the operator re-aims in xy when it sets off,
+        # but heights come from the plan)
+        top = float(op.planned_place(data, target, tl.end)[0][2] + op.scene.task.objects[target].half_extents[2])
         aim = np.array([*aim_point(op, data, target), top + MOUTH_ABOVE_RIM_M])
     else:       # a task point: the mouth straight above it, as high above it as above a rim
         point = point_world(op, target)
@@ -158,7 +147,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     # back down where it came from, or at place_offset of the table
     spot = {"place": TABLE_TARGET, "place_offset": list(item.get("place_offset", start[:2]))}
     place = place_centre(op, data, spot, name) - offset
-    op.leaves(name, place + offset)
+    op.leaves(name, rest_centre(place + offset))
     tl.add(POUR_DURATIONS["back"], pos=place + LIFT_HEIGHT_M * UP)
     # the open hand rises clear of the bottle's top before it moves away: held from the side, the
     # hand is beside the bottle and lower than its top, and a move across would sweep it over

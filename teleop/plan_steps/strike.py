@@ -19,7 +19,7 @@ import numpy as np
 from sim.demo_plan import TABLE_TARGET
 from sim.physics import CONTROL_HZ
 from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, SMOOTHSTEP_PEAK, UP, SideTimeline
-from teleop.plan_steps.pick_place import carry_height, grasp_and_lift, lower_and_release, place_centre
+from teleop.plan_steps.pick_place import carry_height, grasp_and_lift, lower_and_release, place_centre, rest_centre
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
@@ -63,7 +63,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     up = tl.frames[-1]
     up.pos = np.array([*up.pos[:2], max(up.pos[2], carry_height(op, data, {**item, "pick": tool}, offset))])
     place = place_centre(op, data, item, tool) - offset
-    op.leaves(tool, place + offset, on=item["place"])
+    op.leaves(tool, rest_centre(place + offset), on=item["place"])
     carry = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(tool, offset))
     lower_and_release(op, item, tool, offset, place)

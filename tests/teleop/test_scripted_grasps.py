@@ -11,7 +11,7 @@ from sim.errors import SpecError
 from sim.registry import names
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
-from teleop.pinch_grasp import _fingertip_rows, fingertip_rows, hand_kinematics, pinch_grasp, pinch_preshape
+from teleop.pinch_grasp import fingertip_rows, hand_kinematics, pinch_grasp, pinch_preshape, pinch_rows
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
 
@@ -19,7 +19,7 @@ from teleop.scripted_operator import ScriptedOperator
 def _closest_sampled_gap(hand: str, fingers, samples: int = 4000) -> float:
     """The closest thumb-to-finger pad distance over random actuator targets (seeded)."""
     kin = hand_kinematics(hand)
-    thumb, tips = _fingertip_rows(kin, fingers)
+    thumb, tips = pinch_rows(hand, fingers)
     rng = np.random.default_rng(12345)      # not the solver's own seed: these are other samples
     best = np.inf
     for q in rng.uniform(kin.lower, kin.upper, size=(samples, kin.dof)):
@@ -44,7 +44,7 @@ def test_preshape_spreads_the_pads_and_centres_the_object_between_them():
     hand = "wuji"
     kin, grasp = hand_kinematics(hand), pinch_grasp(hand)
     q, centre = pinch_preshape(hand, kin.home, grasp.close, 0.06)
-    thumb, tips = _fingertip_rows(kin, grasp.fingers)
+    thumb, tips = pinch_rows(hand, grasp.fingers)
     P = kin.points(q)
     assert min(np.linalg.norm(P[thumb] - P[t]) for t in tips) >= 0.06
     # nearer the pinch than a wider pre-shape

@@ -110,3 +110,56 @@ def _carried_lowest_over(op, centre, xy_half, steps):
         if np.allclose(hand, closed) and np.all(np.abs(held[:2] - centre[:2]) < xy_half):
             lowest = min(lowest, held[2])
     return lowest
+
+
+def _model(xml: str):
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    mujoco.mj_kinematics(model, data)
+    return model, data
+
+
+def test_a_long_carried_object_is_lifted_over_a_thin_post_between_its_corners():
+    """A 24 cm stick carried crosswise over a 1 cm post: its ends pass either side of the post, its
+    middle would hit it. Points on the stick's whole surface see the post; its corners alone do not."""
+    from teleop.transit import _geom_corners, object_surface, obstacles, transit_height
+
+    model, data = _model("""<mujoco><worldbody>
+        <body name="stick" pos="0 -0.3 0.08"><freejoint/><geom type="box" size="0.12 0.01 0.01"/></body>
+        <body name="post" pos="0 0 0.05"><geom type="cylinder" size="0.005 0.05"/></body>
+        </worldbody></mujoco>""")
+    stick, post = model.body("stick").id, model.body("post").id
+    in_way = obstacles(model, data, "post", post, np.zeros(3), {})
+    above = np.array([[0.0, 0.0, 0.3]])                   # the hand itself passes high over everything
+    offset = np.array([0.0, 0.0, -0.1])                   # the stick's centre from the wrist
+    start, end, level = np.array([0.0, -0.3, 0.18]), np.array([0.0, 0.3, 0.18]), np.array([1.0, 0, 0, 0])
+    corners = _geom_corners(model, data, model.body_geomadr[stick]) - data.xpos[stick] + offset
+    assert transit_height(start, level, end, level, above, corners, in_way) is None
+    surface = object_surface(model, data, stick) - data.xpos[stick] + offset
+    height = transit_height(start, level, end, level, above, surface, in_way)
+    stick_bottom = height + offset[2] - 0.01
+    assert height is not None and stick_bottom == pytest.approx(0.10 + CLEARANCE_M)
+
+
+def test_a_link_hanging_from_a_turned_link_turns_with_it():
+    """A door turned 90 degrees by an earlier step carries its handle round: the handle's obstacle is
+    where the handle is with the door open."""
+    from teleop.transit import obstacles
+
+    xml = """<mujoco><worldbody><body name="cabinet" pos="0.3 0 0.2"><geom type="box" size="0.1 0.1 0.2"/>
+        <body name="door" pos="0.1 -0.1 0"><joint name="hinge" type="hinge" axis="0 0 1"/>
+          <geom type="box" size="0.01 0.1 0.2" pos="0.01 0.1 0"/>
+          <body name="handle" pos="0.03 0.17 0"><geom type="box" size="0.01 0.01 0.05"/></body>
+        </body></body></worldbody></mujoco>"""
+    model, data = _model(xml)
+    door, hinge = model.body("door").id, model.joint("hinge").id
+    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])        # 90 degrees about z
+    turned = {door: (data.xanchor[hinge].copy(), turn)}
+    planned = obstacles(model, data, "cabinet", model.body("cabinet").id, np.zeros(3), turned)
+    data.qpos[model.jnt_qposadr[hinge]] = np.pi / 2
+    mujoco.mj_kinematics(model, data)
+    opened = obstacles(model, data, "cabinet", model.body("cabinet").id, np.zeros(3), {})
+    for a, b in zip(planned, opened):
+        np.testing.assert_allclose(a.centre, b.centre, atol=1e-12)
+        np.testing.assert_allclose(a.rot, b.rot, atol=1e-12)
+        assert a.top == pytest.approx(b.top)
