@@ -53,13 +53,21 @@ class HandKinematics:
         self.mid = (self.lower + self.upper) / 2
         self.home = np.clip([self.hand.home.get(a.joint, 0.0) for a in self.hand.actuators], self.lower, self.upper)
         act_of_joint = {a.joint: i for i, a in enumerate(self.hand.actuators)}
-        self.couplings = []     # (follower qpos address, master actuator index, polycoef, range)
         for c in self.hand.couplings:
             if c.master not in act_of_joint:
                 raise DescriptionError(f"{self.hand.path}: field 'couplings': master {c.master!r} of {c.joint!r} "
                                        f"is not actuated (retargeting needs couplings on actuated joints)")
-            self.couplings.append((m.joint(c.joint).qposadr[0], act_of_joint[c.master], tuple(c.polycoef),
-                                   self.hand.joint(c.joint).range))
+        # the couplings as arrays, one row per follower: its qpos address, its master's actuator index,
+        # its polynomial's coefficients (constant first) and its range
+        couplings = self.hand.couplings
+        self._follower = np.array([m.joint(c.joint).qposadr[0] for c in couplings], int)
+        self._master = np.array([act_of_joint[c.master] for c in couplings], int)
+        degree = max((len(c.polycoef) for c in couplings), default=1)
+        self._coef = np.zeros((len(couplings), degree))
+        for i, c in enumerate(couplings):
+            self._coef[i, : len(c.polycoef)] = c.polycoef
+        ranges = np.array([self.hand.joint(c.joint).range for c in couplings], float).reshape(-1, 2)
+        self._follower_lo, self._follower_hi = ranges[:, 0], ranges[:, 1]
         self.site_ids = np.array([m.site("retarget_wrist").id] + [m.site(f"retarget_{t.finger}").id
                                                                    for t in self.spec.fingertips])
         self._jacp = np.zeros((3, m.nv))
@@ -73,13 +81,17 @@ class HandKinematics:
     def _set(self, q: np.ndarray) -> None:
         qpos = self.data.qpos
         qpos[self.act_qadr] = q
-        for adr, master, coef, (lo, hi) in self.couplings:
-            x = float(q[master])
-            value = sum(c * x ** k for k, c in enumerate(coef))
-            qpos[adr] = min(max(value, lo), hi)
+        if len(self._follower):
+            # every follower's polynomial and its slope at its master's angle, by Horner's rule
+            x = q[self._master]
+            value, slope = np.zeros_like(x), np.zeros_like(x)
+            for k in range(self._coef.shape[1] - 1, -1, -1):
+                slope = slope * x + k * self._coef[:, k] if k else slope
+                value = value * x + self._coef[:, k]
+            lo, hi = self._follower_lo, self._follower_hi
+            qpos[self._follower] = np.minimum(np.maximum(value, lo), hi)
             # the chain rule through the coupling; zero where the follower sits on its limit
-            slope = sum(k * c * x ** (k - 1) for k, c in enumerate(coef) if k)
-            self._dfull[adr, master] = 0.0 if value <= lo or value >= hi else slope
+            self._dfull[self._follower, self._master] = np.where((value <= lo) | (value >= hi), 0.0, slope)
         mujoco.mj_kinematics(self.model, self.data)
 
     def points(self, q: np.ndarray) -> np.ndarray:
