@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import json
 import logging
+import time
+from collections import defaultdict
 from typing import Mapping
 
 import mujoco
@@ -55,6 +57,8 @@ class LabelFrames:
         self.box3d = Box3DLabeler(model, self.ids, shapes) if "box3d" in want else None
         self.occupancy = (OccupancyLabeler(model, self.ids, profile.occupancy_bounds_m,
                                            profile.occupancy_voxel_size_m, shapes) if "occupancy" in want else None)
+        # time spent so far per label (benchmarks): segmentation (masks), box2d, box3d, occupancy
+        self.seconds: dict[str, float] = defaultdict(float)
 
     @property
     def needs_segmentation(self) -> bool:
@@ -89,6 +93,7 @@ class LabelFrames:
         if self.needs_segmentation:
             self._capture_images(data, seg_images or {}, frame, errors)
         if self.box3d is not None:
+            t0 = time.perf_counter()
             try:
                 boxes = self.box3d.capture(data)
             except Exception as exc:   # keep the episode: flag the frame instead of aborting
@@ -96,12 +101,14 @@ class LabelFrames:
                 errors.append(f"box3d failed: {exc}")
                 n = len(self.objects)
                 boxes = Boxes3D(np.full((n, 3), np.nan), np.full((n, 3), np.nan), np.full((n, 4), np.nan))
+            self.seconds["box3d"] += time.perf_counter() - t0
             for i, obj in enumerate(self.objects):
                 frame[schema.box3d_path(obj, "center_world")] = boxes.center_world[i]
                 frame[schema.box3d_path(obj, "size_lwh")] = boxes.size_lwh[i]
                 frame[schema.box3d_path(obj, "quat_world")] = boxes.quat_world[i]
         if self.occupancy is not None:
             root = schema.OCCUPANCY_ROOT
+            t0 = time.perf_counter()
             try:
                 grid = self.occupancy.capture(data)
                 semantic, instance, valid = grid.semantic, grid.instance, True
@@ -110,6 +117,7 @@ class LabelFrames:
                 errors.append(f"occupancy failed: {exc}")
                 semantic = np.zeros(self.occupancy.shape, np.uint8)
                 instance, valid = np.zeros(self.occupancy.shape, np.uint16), False
+            self.seconds["occupancy"] += time.perf_counter() - t0
             frame[f"{root}/grid"], frame[f"{root}/instance_grid"] = semantic, instance
             frame[f"{root}/frame_valid"] = np.bool_(valid)
         return frame, "; ".join(errors)
@@ -117,6 +125,7 @@ class LabelFrames:
     def _capture_images(self, data, seg_images: Mapping[str, np.ndarray], frame: dict, errors: list) -> None:
         h, w, n = self.profile.height, self.profile.width, len(self.objects)
         for cam in self.profile.camera_ids:
+            t0 = time.perf_counter()
             try:
                 if cam not in seg_images:
                     raise ValueError("no segmentation image")
@@ -129,6 +138,8 @@ class LabelFrames:
                 errors.append(f"labels of camera {cam} failed: {exc}")
                 semantic, instance = np.zeros((h, w), np.uint8), np.zeros((h, w), np.uint16)
                 masks = None
+            t1 = time.perf_counter()
+            self.seconds["segmentation"] += t1 - t0
             boxes = None
             if self.box2d is not None and masks is not None:
                 try:        # a box failure keeps the (valid) masks
@@ -136,6 +147,7 @@ class LabelFrames:
                 except Exception as exc:
                     log.warning("2D boxes of camera %s failed: %s", cam, exc)
                     errors.append(f"2D boxes of camera {cam} failed: {exc}")
+                self.seconds["box2d"] += time.perf_counter() - t1
             if "segmentation" in self.modalities:
                 frame[f"cameras/{cam}/semantic_seg"] = semantic
                 frame[f"cameras/{cam}/instance_seg"] = instance

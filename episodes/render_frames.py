@@ -75,8 +75,15 @@ class FrameRenderer:
 
     def seconds(self) -> dict[str, float]:
         """Time spent so far per part: camera_scene_update, camera_rgb, camera_depth_and_ids (GL render and
-        read-back), camera_decode (buffers -> metric depth and geom ids), labels, tactile."""
-        return {**{f"camera_{k}": v for k, v in self.cameras.seconds.items()}, **self._seconds}
+        read-back), camera_decode (buffers -> metric depth and geom ids), labels_segmentation (masks),
+        labels_box2d, labels_box3d, labels_occupancy, labels_other (the rest of the labels' time: laying
+        out their datasets), tactile."""
+        out = {**{f"camera_{k}": v for k, v in self.cameras.seconds.items()}, **self._seconds}
+        if self.labels is not None:
+            total = out.pop("labels", 0.0)
+            parts = {f"labels_{k}": v for k, v in self.labels.seconds.items()}
+            out.update(parts, labels_other=max(0.0, total - sum(parts.values())))
+        return out
 
     def _blank_shots(self) -> dict:
         h, w = self.profile.height, self.profile.width

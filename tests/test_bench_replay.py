@@ -16,3 +16,6 @@ def test_replay_bench_parts_add_up_and_setup_is_reported_apart():
     unavoidable = sum(share[f"render_{k}"] for k in UNAVOIDABLE_RENDER_PARTS if f"render_{k}" in share)
     assert out["unavoidable_render_and_raycast_share"] == pytest.approx(unavoidable, abs=0.002)
     assert out["antialias"] is False and out["shadows"] is False
+    # each label has its own share (preview lists box2d, box3d and occupancy; box2d needs the masks)
+    assert {"render_labels_segmentation", "render_labels_box2d", "render_labels_box3d",
+            "render_labels_occupancy"} <= share.keys() and "render_labels" not in share
