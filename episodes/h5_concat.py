@@ -92,12 +92,15 @@ def _concat(out: h5py.File, name: str, sources: list[h5py.Dataset]) -> None:
     start = 0
     for s in sources:
         n = s.shape[0]
-        if one_frame_chunks and s.chunks == src.chunks and _filters(s) == _filters(src):
+        same_fill = np.asarray(s.fillvalue).tobytes() == np.asarray(src.fillvalue).tobytes()
+        if one_frame_chunks and s.chunks == src.chunks and _filters(s) == _filters(src) and same_fill:
             # the allocated chunks only: a frame the writer did not store (all zero) reads as the fill value
-            for k in range(s.id.get_num_chunks()):
-                offset = s.id.get_chunk_info(k).chunk_offset
-                mask, chunk = s.id.read_direct_chunk(offset)
-                dst.id.write_direct_chunk((start + offset[0], *offset[1:]), chunk, mask)
+            tail = (0,) * (len(s.shape) - 1)
+            for i in range(n):
+                if s.id.get_chunk_info_by_coord((i, *tail)).byte_offset is None:
+                    continue
+                mask, chunk = s.id.read_direct_chunk((i, *tail))
+                dst.id.write_direct_chunk((start + i, *tail), chunk, mask)
         else:
             dst[start:start + n] = s[()] if n else np.empty((0, *s.shape[1:]), s.dtype)
         start += n

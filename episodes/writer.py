@@ -51,7 +51,8 @@ class EpisodeWriter:
         self._file: h5py.File | None = None
         self._count = 0
         # open handles, kept for the whole episode: dropping one flushes its chunk cache, which
-        # recompresses a partly filled 256-frame chunk on every append (~4 ms per small dataset)
+        # recompresses a partly filled 256-frame chunk on every append (~4 ms per small dataset;
+        # one-frame image chunks have no cache: see _no_chunk_cache)
         self._datasets: dict[str, _Stream] = {}
         # small per-frame values (boxes, poses, flags, error text) are kept in memory and written once
         # at the end: appending to ~150 tiny datasets cost ~0.1 ms each per frame in HDF5 calls
@@ -61,9 +62,7 @@ class EpisodeWriter:
 
     def __enter__(self) -> "EpisodeWriter":
         tmp = self._atomic.__enter__()
-        # no chunk cache: every chunk is written whole, once, and never read back, so caching it only
-        # adds a copy (paper frames: writing ~22 -> ~18 ms a frame; the same chunks)
-        self._file = h5py.File(tmp, "w", rdcc_nbytes=0)
+        self._file = h5py.File(tmp, "w")
         self._file.attrs["schema_version"] = schema.SCHEMA_VERSION
         for key, value in self.static.items():
             self._write_static(key, value)
@@ -117,6 +116,8 @@ class EpisodeWriter:
         else:
             kwargs = {"compression": "gzip", "compression_opts": 4, "shuffle": value.dtype.kind == "f"}
         frames = schema.IMAGE_CHUNK_FRAMES if image_like else 256
+        if frames == 1:     # each chunk is written whole, once, and never read back: a cache only adds a copy
+            kwargs["dapl"] = _no_chunk_cache()
         return self._file.create_dataset(key, shape=(0, *value.shape), maxshape=(None, *value.shape),
                                          dtype=value.dtype, chunks=(frames, *value.shape), **kwargs)
 
@@ -192,7 +193,7 @@ class _Stream:
         self._memory = h5py.h5s.create_simple((1, *self.frame_shape))
         self._start = (0,) * len(self.frame_shape)
         # only where a row is its own chunk and the fill value is zero bytes
-        self.skip_zeros = ds.chunks is not None and ds.chunks[0] == 1 and not np.asarray(ds.fillvalue).any()
+        self.skip_zeros = ds.chunks is not None and ds.chunks[0] == 1 and _all_zero_bytes(np.asarray(ds.fillvalue))
 
     def write(self, index: int, value: np.ndarray) -> None:
         if index >= self.capacity:
@@ -212,6 +213,15 @@ class _Stream:
         if self.capacity != self.length:
             self.ds.resize(self.length, axis=0)
             self.capacity = self.length
+
+
+def _no_chunk_cache() -> h5py.h5p.PropDAID:
+    """Dataset access without a chunk cache (paper frames: image writes ~22 -> ~18 ms a frame, the same
+    chunks). h5py's create_dataset ignores ``rdcc_nbytes=0`` (it only applies a truthy value)."""
+    dapl = h5py.h5p.create(h5py.h5p.DATASET_ACCESS)
+    slots, _, preemption = dapl.get_chunk_cache()
+    dapl.set_chunk_cache(slots, 0, preemption)
+    return dapl
 
 
 def _all_zero_bytes(value: np.ndarray) -> bool:

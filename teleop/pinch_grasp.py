@@ -40,12 +40,16 @@ class PinchGrasp:
     fingers: tuple[str, ...]    # the fingers the thumb pinches against
 
 
+def _pinch_keypoints(fingers: tuple[str, ...]) -> tuple[str, ...]:
+    """The MediaPipe keypoints that the thumb's and ``fingers``' retarget points follow (the spec
+    guarantees those, not finger names)."""
+    return tuple(f"{'pinky' if finger == 'little' else finger}_tip" for finger in ("thumb", *fingers))
+
+
 def pinch_rows(hand_name: str, fingers: tuple[str, ...]) -> tuple[int, list[int]]:
     """Rows of ``HandKinematics.points`` (row 0 is the wrist point, then ``fingertips_in_site_frame``'s
-    rows) of the thumb pad and of ``fingers``' pads, found by the MediaPipe keypoint each retarget point
-    follows (the spec guarantees those, not finger names)."""
-    keypoints = tuple(f"{'pinky' if finger == 'little' else finger}_tip" for finger in ("thumb", *fingers))
-    thumb, *tips = (1 + row for row in fingertip_rows(hand_name, keypoints))
+    rows) of the thumb pad and of ``fingers``' pads."""
+    thumb, *tips = (1 + row for row in fingertip_rows(hand_name, _pinch_keypoints(fingers)))
     return thumb, tips
 
 
@@ -145,7 +149,7 @@ def fingertip_rows(hand_name: str, keypoints: tuple[str, ...] | None = None) -> 
     missing = [k for k in keypoints if k not in followed]
     if missing:
         raise DescriptionError(f"{hand_kinematics(hand_name).hand.path}: field 'retarget.fingertips': expected "
-                               f"points following {missing}, got {followed}")
+                               f"points following {missing} (for a pinch, a plan step's fingers), got {followed}")
     return [followed.index(k) for k in keypoints]
 
 
@@ -155,9 +159,9 @@ def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
     hand half closed: the direction across which a pinched object must fit."""
     grasp = pinch_grasp(hand_name)
     kin = hand_kinematics(hand_name)
-    thumb, tips = pinch_rows(hand_name, grasp.fingers)
+    thumb, *tips = fingertip_rows(hand_name, _pinch_keypoints(grasp.fingers))
     P = fingertips_in_site_frame(hand_name, 0.5 * (kin.home + grasp.close))
-    axis = P[[t - 1 for t in tips]].mean(axis=0) - P[thumb - 1]    # rows of P: fingertips only
+    axis = P[tips].mean(axis=0) - P[thumb]
     axis /= np.linalg.norm(axis)
     axis.flags.writeable = False        # cached: shared by every caller
     return axis

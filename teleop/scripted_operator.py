@@ -23,7 +23,7 @@ from sim.scene.builder import Scene
 from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation
 from teleop.pinch_grasp import pinch_grasp
 from teleop.plan_steps import PLANNERS
-from teleop.transit import hand_outline, object_surface, obstacles, transit_height
+from teleop.transit import hand_outline, bounding_box_points, obstacles, transit_height
 
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
@@ -148,7 +148,7 @@ class ScriptedOperator:
         points = None
         if carried is not None:
             name, offset = carried
-            points = object_surface(self.scene.model, data, ids[name]) - data.xpos[ids[name]] + offset
+            points = bounding_box_points(self.scene.model, data, ids[name]) - data.xpos[ids[name]] + offset
         outline = hand_outline(side["hand"], side["name"], last.hand, hand)
         height = transit_height(last.pos, last.quat, np.asarray(pos, float), quat, outline, points, in_way)
         if height is None:

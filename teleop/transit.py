@@ -83,12 +83,13 @@ def _geom_corners(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndar
     return data.geom_xpos[g] + (centre + signs * half) @ R.T
 
 
-def _box_surface(half: np.ndarray, spacing: float) -> np.ndarray:
-    """Points on the surface of a box of half sizes ``half`` (its frame), corners included, at most
+def _box_faces(half: np.ndarray, spacing: float) -> np.ndarray:
+    """Points on the faces of a box of half sizes ``half`` (its frame), corners included, at most
     ``spacing`` apart along each axis."""
-    axes = [np.linspace(-h, h, max(2, int(np.ceil(2 * h / spacing)) + 1)) for h in half]
-    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    return grid[np.any(np.isclose(np.abs(grid), half), axis=1)]
+    counts = [max(2, int(np.ceil(2 * h / spacing)) + 1) for h in half]
+    index = np.stack(np.meshgrid(*(np.arange(n) for n in counts), indexing="ij"), axis=-1).reshape(-1, 3)
+    on_face = np.any((index == 0) | (index == np.array(counts) - 1), axis=1)
+    return -half + index[on_face] * (2 * half / (np.array(counts) - 1))
 
 
 def object_geoms(model: mujoco.MjModel, body: int) -> list[int]:
@@ -96,14 +97,14 @@ def object_geoms(model: mujoco.MjModel, body: int) -> list[int]:
     return [g for g in range(model.ngeom) if model.body_rootid[model.geom_bodyid[g]] == body]
 
 
-def object_surface(model: mujoco.MjModel, data: mujoco.MjData, body: int) -> np.ndarray:
-    """Points on the bounding boxes of the object's geoms (world, as in ``data``), corners included and
-    at most 2 SIDE_MARGIN_M apart: a long object carried across a thin one cannot pass it between
-    two points unseen."""
+def bounding_box_points(model: mujoco.MjModel, data: mujoco.MjData, body: int) -> np.ndarray:
+    """Points on the faces of the bounding boxes of the object's geoms (world, as in ``data``),
+    corners included and at most 2 SIDE_MARGIN_M apart: a long object carried across a thin one
+    cannot pass it between two points unseen."""
     points = []
     for g in object_geoms(model, body):
         R = data.geom_xmat[g].reshape(3, 3)
-        local = model.geom_aabb[g, :3] + _box_surface(model.geom_aabb[g, 3:], 2 * SIDE_MARGIN_M)
+        local = model.geom_aabb[g, :3] + _box_faces(model.geom_aabb[g, 3:], 2 * SIDE_MARGIN_M)
         points.append(data.geom_xpos[g] + local @ R.T)
     return np.concatenate(points)
 

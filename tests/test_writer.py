@@ -161,7 +161,6 @@ def test_a_frame_of_another_dtype_is_converted_by_hdf5_as_for_camera_images(tmp_
         assert f["mask"][1, 0, :4].tolist() == [0, 2, 255, 255]
 
 
-
 def test_all_zero_frames_are_not_stored_and_read_back_as_zeros_also_after_a_join(tmp_path):
     """A tactile site out of contact or an empty mask is a frame of zero bytes: its chunk is left
     unallocated (no compression, no space) and reads back as zeros; a join keeps it so. -0.0 is not
@@ -170,7 +169,7 @@ def test_all_zero_frames_are_not_stored_and_read_back_as_zeros_also_after_a_join
 
     ones, negative_zero = np.ones((64, 64), np.float32), np.full((64, 64), -0.0, np.float32)
     zeros, contact = np.zeros((64, 64), np.float32), np.zeros((64, 64), np.float32)
-    contact[63, 63] = 1e-3                        # one pixel, the last: the check reads past the first byte
+    contact[31, 17] = 1e-3                        # one pixel in the middle: neither the first nor the last byte
     frames = [zeros, ones, zeros, negative_zero, contact, zeros]
     for name, part in (("a.h5", frames[:3]), ("b.h5", frames[3:])):
         with EpisodeWriter(tmp_path / name, {}) as w:
@@ -183,3 +182,28 @@ def test_all_zero_frames_are_not_stored_and_read_back_as_zeros_also_after_a_join
         assert stored == [1, 3, 4] and f["mask"].id.get_num_chunks() == 2
         assert f["tactile"][()].tobytes() == np.stack(frames).tobytes()      # -0.0 kept bit for bit
         np.testing.assert_array_equal(f["mask"][()], np.stack([fr != 0 for fr in frames]).astype(np.uint8))
+
+
+@pytest.mark.parametrize("shape, dtype", [((65, 65), np.uint8), ((7,), np.float64), ((3, 5), np.int16), ((0,), np.uint8)])
+def test_the_zero_check_looks_at_every_byte(shape, dtype):
+    """Odd lengths (a tail after the 8-byte words), a single non-zero byte anywhere."""
+    from episodes.writer import _all_zero_bytes
+
+    value = np.zeros(shape, dtype)
+    assert _all_zero_bytes(value) and _all_zero_bytes(value[::-1])
+    raw = value.reshape(-1).view(np.uint8)
+    for i in range(raw.size):
+        raw[i] = 1
+        assert not _all_zero_bytes(value), i
+        raw[i] = 0
+
+
+def test_only_one_frame_image_chunks_go_without_a_chunk_cache(tmp_path):
+    """Image rows are whole chunks, written once: no cache. A large 1-D row shares 256-frame chunks, and
+    without a cache every append would decompress and recompress its chunk."""
+    with EpisodeWriter(tmp_path / "e.h5", {}) as w:
+        for _ in range(3):
+            w.append({"image": np.ones((64, 64), np.float32), "row": np.ones(2000, np.float32)})
+        image, row = w.file["image"], w.file["row"]
+        assert image.chunks[0] == 1 and image.id.get_access_plist().get_chunk_cache()[1] == 0
+        assert row.chunks[0] == 256 and row.id.get_access_plist().get_chunk_cache()[1] > 0

@@ -37,7 +37,7 @@ import numpy as np
 
 from .cameras import add_cameras
 from .description import (EmbodimentDescription, GeomSpec, HandDescription, LinkSpec, Transform,
-                          load_embodiment, mat_to_quat)
+                          coupled_position, load_embodiment, mat_to_quat)
 from .kinematics import ArmKinematics, axis_rotation, hand_link_poses
 from .mirror import side_links, side_pad, side_transform
 from .real_model import add_real_actuators, attach_real_hand, requested_hand_model
@@ -227,7 +227,7 @@ def _hand_home(hand: HandDescription) -> dict[str, float]:
     for c in hand.couplings:
         if c.joint not in hand.home:
             m = q[c.master]
-            q[c.joint] = float(np.clip(sum(k * m ** i for i, k in enumerate(c.polycoef)), *hand.joint(c.joint).range))
+            q[c.joint] = float(np.clip(coupled_position(c.polycoef, m), *hand.joint(c.joint).range))
     return q
 
 

@@ -231,6 +231,25 @@ class CouplingSpec:
     polycoef: tuple[float, ...]   # q_joint = c0 + c1 q_master + c2 q_master^2 + ...
 
 
+def coupled_position(polycoef, master):
+    """A coupled joint's position for its master's: ``polycoef`` [..., K] (constant first; rows for
+    several followers), ``master`` broadcasting against it; summed from the constant term up."""
+    coef, x = np.asarray(polycoef, float), np.asarray(master, float)
+    value = np.zeros(np.broadcast_shapes(coef.shape[:-1], x.shape))
+    for k in range(coef.shape[-1]):
+        value = value + coef[..., k] * x ** k
+    return value
+
+
+def coupled_slope(polycoef, master):
+    """d(coupled_position)/d(master), summed the same way."""
+    coef, x = np.asarray(polycoef, float), np.asarray(master, float)
+    slope = np.zeros(np.broadcast_shapes(coef.shape[:-1], x.shape))
+    for k in range(1, coef.shape[-1]):
+        slope = slope + k * coef[..., k] * x ** (k - 1)
+    return slope
+
+
 @dataclass(frozen=True, eq=False)  # arrays: compare pads with same_as
 class TactilePad:
     """A contact pad in its attach-body frame (metres); ``tactile.pads`` meshes its surface.

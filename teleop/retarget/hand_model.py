@@ -12,7 +12,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim.embodiment.description import DescriptionError, HandDescription, load_hand
+from sim.embodiment.description import DescriptionError, HandDescription, coupled_position, coupled_slope, load_hand
 from sim.embodiment.retarget_spec import RetargetSpec, load_retarget_spec
 
 
@@ -82,12 +82,8 @@ class HandKinematics:
         qpos = self.data.qpos
         qpos[self.act_qadr] = q
         if len(self._follower):
-            # every follower's polynomial and its slope at its master's angle, by Horner's rule
-            x = q[self._master]
-            value, slope = np.zeros_like(x), np.zeros_like(x)
-            for k in range(self._coef.shape[1] - 1, -1, -1):
-                slope = slope * x + k * self._coef[:, k] if k else slope
-                value = value * x + self._coef[:, k]
+            x = q[self._master]         # every follower's polynomial at once
+            value, slope = coupled_position(self._coef, x), coupled_slope(self._coef, x)
             lo, hi = self._follower_lo, self._follower_hi
             qpos[self._follower] = np.minimum(np.maximum(value, lo), hi)
             # the chain rule through the coupling; zero where the follower sits on its limit

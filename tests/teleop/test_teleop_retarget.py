@@ -130,6 +130,21 @@ def test_jacobian_over_actuated_joints_matches_finite_differences(hand):
         assert kin.data.qpos[kin.model.joint(c.joint).qposadr[0]] == pytest.approx(expected)
 
 
+def test_a_coupling_polynomial_of_any_degree_and_its_slope():
+    """The catalog's couplings are linear, but a hand file may give up to five coefficients: the one
+    polynomial (builder's home pose, retargeting) and its slope, for several followers at once."""
+    from sim.embodiment.description import coupled_position, coupled_slope
+
+    coef = np.array([[0.1, 0.7, -0.3, 0.0, 0.05], [0.7235, 1.0585, 0.0, 0.0, 0.0]])
+    x = np.array([0.4, -1.3])
+    expected = [sum(c * v ** k for k, c in enumerate(row)) for row, v in zip(coef, x)]
+    np.testing.assert_allclose(coupled_position(coef, x), expected, rtol=1e-14)
+    assert coupled_position(coef[1], x[1]) == expected[1]          # linear: the same floats
+    eps = 1e-6
+    numeric = (coupled_position(coef, x + eps) - coupled_position(coef, x - eps)) / (2 * eps)
+    np.testing.assert_allclose(coupled_slope(coef, x), numeric, rtol=1e-8)
+
+
 def test_left_hand_is_the_mirror_of_the_right():
     right, left = DexPilotRetargeter("allegro"), DexPilotRetargeter("allegro")
     for k in range(5):

@@ -122,7 +122,7 @@ def _model(xml: str):
 def test_a_long_carried_object_is_lifted_over_a_thin_post_between_its_corners():
     """A 24 cm stick carried crosswise over a 1 cm post: its ends pass either side of the post, its
     middle would hit it. Points on the stick's whole surface see the post; its corners alone do not."""
-    from teleop.transit import _geom_corners, object_surface, obstacles, transit_height
+    from teleop.transit import _geom_corners, bounding_box_points, obstacles, transit_height
 
     model, data = _model("""<mujoco><worldbody>
         <body name="stick" pos="0 -0.3 0.08"><freejoint/><geom type="box" size="0.12 0.01 0.01"/></body>
@@ -135,28 +135,36 @@ def test_a_long_carried_object_is_lifted_over_a_thin_post_between_its_corners():
     start, end, level = np.array([0.0, -0.3, 0.18]), np.array([0.0, 0.3, 0.18]), np.array([1.0, 0, 0, 0])
     corners = _geom_corners(model, data, model.body_geomadr[stick]) - data.xpos[stick] + offset
     assert transit_height(start, level, end, level, above, corners, in_way) is None
-    surface = object_surface(model, data, stick) - data.xpos[stick] + offset
+    surface = bounding_box_points(model, data, stick) - data.xpos[stick] + offset
     height = transit_height(start, level, end, level, above, surface, in_way)
     stick_bottom = height + offset[2] - 0.01
     assert height is not None and stick_bottom == pytest.approx(0.10 + CLEARANCE_M)
 
 
-def test_a_link_hanging_from_a_turned_link_turns_with_it():
-    """A door turned 90 degrees by an earlier step carries its handle round: the handle's obstacle is
-    where the handle is with the door open."""
+@pytest.mark.parametrize("door_angle, knob_angle", [(np.pi / 2, None), (1.2, 0.7)])
+def test_a_link_hanging_from_a_turned_link_turns_with_it(door_angle, knob_angle):
+    """A door turned by an earlier step carries its handle round, and a knob on the handle turned too
+    comes round with both: each obstacle is where its geom is with the hinges really turned."""
+    from teleop.operator_motion import axis_rotation
     from teleop.transit import obstacles
 
     xml = """<mujoco><worldbody><body name="cabinet" pos="0.3 0 0.2"><geom type="box" size="0.1 0.1 0.2"/>
         <body name="door" pos="0.1 -0.1 0"><joint name="hinge" type="hinge" axis="0 0 1"/>
           <geom type="box" size="0.01 0.1 0.2" pos="0.01 0.1 0"/>
-          <body name="handle" pos="0.03 0.17 0"><geom type="box" size="0.01 0.01 0.05"/></body>
+          <body name="handle" pos="0.03 0.17 0"><geom type="box" size="0.01 0.01 0.05"/>
+            <body name="knob" pos="0.02 0 0"><joint name="twist" type="hinge" axis="1 0 0"/>
+              <geom type="box" size="0.01 0.03 0.005" pos="0.01 0.02 0"/></body>
+          </body>
         </body></body></worldbody></mujoco>"""
     model, data = _model(xml)
-    door, hinge = model.body("door").id, model.joint("hinge").id
-    turn = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])        # 90 degrees about z
-    turned = {door: (data.xanchor[hinge].copy(), turn)}
+    turns = {"hinge": door_angle, **({"twist": knob_angle} if knob_angle is not None else {})}
+    turned = {}
+    for joint, angle in turns.items():
+        j = model.joint(joint).id
+        turned[int(model.jnt_bodyid[j])] = (data.xanchor[j].copy(), axis_rotation(data.xaxis[j].copy(), angle))
     planned = obstacles(model, data, "cabinet", model.body("cabinet").id, np.zeros(3), turned)
-    data.qpos[model.jnt_qposadr[hinge]] = np.pi / 2
+    for joint, angle in turns.items():
+        data.qpos[model.jnt_qposadr[model.joint(joint).id]] = angle
     mujoco.mj_kinematics(model, data)
     opened = obstacles(model, data, "cabinet", model.body("cabinet").id, np.zeros(3), {})
     for a, b in zip(planned, opened):
