@@ -24,7 +24,7 @@ SETTINGS = [
     ("gaming_desk_setup", "jaka_zu7_dexhand021", 1),
     ("medicine_shoebox_pack", "panda_orca", 4),
     ("sports_ball_cup_sort", "panda_allegro", 0),
-    ("trash_disposal", "ur5_rh56dfx", 1),
+    ("trash_disposal", "ur5_rh56dfx", 0),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
 ]
 GUARDED_ELSEWHERE = {"citrus_plate_loading"}
