@@ -8,6 +8,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
@@ -100,8 +101,6 @@ def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
     part of the work (physics, each camera modality, tactile, posing, writing), bytes per frame on
     disk per modality; with `workers` > 1 also the render's wall-clock speed-up over one worker.
     OpenCV (segment lookups, the tactile blur) runs on one thread meanwhile, as the figures are per core."""
-    import cv2
-
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
     try:
@@ -111,8 +110,6 @@ def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
 
 
 def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
-    import cv2
-
     profile = sensor_profile(profile_name)
     clock = time.perf_counter
     with tempfile.TemporaryDirectory() as tmp:
@@ -204,7 +201,6 @@ def bench_tactile_replay(profile_name: str, steps: int) -> dict:
     Per frame: pose the replayed state, render every camera of the profile, then sense every
     tactile site and append its datasets to an HDF5 file (what `render_to_file` adds per frame).
     """
-    import cv2
     import mujoco
 
     from episodes.raw import read_raw

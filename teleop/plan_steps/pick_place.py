@@ -191,26 +191,33 @@ def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.nd
         tl.add(DURATIONS["lift"], pos=np.array([*tl.frames[-1].pos[:2], rise_to]))
 
 
-def carry_height(op: ScriptedOperator, data: mujoco.MjData, item: dict, offset: np.ndarray) -> float:
-    """The lowest wrist height at which the carried object's bottom clears the top of the step's
+def carry_height(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> float:
+    """The lowest wrist height at which the carried object ``name``'s bottom clears the top of the step's
     target by CARRY_CLEARANCE_M: a person lifts a thing over a tall bin's rim before moving it across."""
     if item["place"] == TABLE_TARGET:
         return -np.inf
     task = op.scene.task
     top = op.object_pos(data, item["place"])[2] + task.objects[item["place"]].half_extents[2]
-    return float(top + CARRY_CLEARANCE_M + task.objects[item["pick"]].half_extents[2] - offset[2])
+    return float(top + CARRY_CLEARANCE_M + task.objects[name].half_extents[2] - offset[2])
+
+
+def carry_and_place(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> None:
+    """The held object ``name`` (its centre ``offset`` from the wrist) carried from where the hand is to
+    the step's `place` at `place_offset`: up over the place's rim, across (over anything in the way),
+    lowered and let go; the operator looks where the place is when the hand sets off. The second half
+    of a pick, and how a strike puts its tool away."""
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    lifted = tl.frames[-1]
+    lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, name, offset))])
+    place = place_centre(op, data, item, name) - offset
+    op.leaves(name, rest_centre(place + offset), on=item["place"])
+    carry = len(tl.frames)
+    op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
+    lower_and_release(op, item, name, offset, place)
+    if item["place"] != TABLE_TARGET:
+        op.look_again(side, item["place"], data, carry, len(tl.frames))
 
 
 def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
-    side = op.sides[item["hand"]]
-    tl: SideTimeline = side["timeline"]
-    offset = grasp_and_lift(op, data, item, item["pick"])
-    lifted = tl.frames[-1]
-    lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, offset))])
-    place = place_centre(op, data, item, item["pick"]) - offset
-    op.leaves(item["pick"], rest_centre(place + offset), on=item["place"])
-    carry = len(tl.frames)
-    op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(item["pick"], offset))
-    lower_and_release(op, item, item["pick"], offset, place)
-    if item["place"] != TABLE_TARGET:
-        op.look_again(side, item["place"], data, carry, len(tl.frames))
+    carry_and_place(op, data, item, item["pick"], grasp_and_lift(op, data, item, item["pick"]))

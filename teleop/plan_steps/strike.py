@@ -16,10 +16,9 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from sim.demo_plan import TABLE_TARGET
 from sim.physics import CONTROL_HZ
-from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, SMOOTHSTEP_PEAK, UP, SideTimeline
-from teleop.plan_steps.pick_place import carry_height, grasp_and_lift, lower_and_release, place_centre, rest_centre
+from teleop.operator_motion import DURATIONS, SMOOTHSTEP_PEAK, UP, SideTimeline
+from teleop.plan_steps.pick_place import carry_and_place, grasp_and_lift
 
 if TYPE_CHECKING:
     from teleop.scripted_operator import ScriptedOperator
@@ -59,13 +58,4 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     tl.add(swing_steps(down), pos=ready - down * UP)
     tl.add(DURATIONS["lift"], pos=ready)            # back up, clear of the target
     op.look_again(side, target, data, first, len(tl.frames))   # it may have been nudged since planning
-    # then away as a pick: over the place's rim, lowered, let go
-    up = tl.frames[-1]
-    up.pos = np.array([*up.pos[:2], max(up.pos[2], carry_height(op, data, {**item, "pick": tool}, offset))])
-    place = place_centre(op, data, item, tool) - offset
-    op.leaves(tool, rest_centre(place + offset), on=item["place"])
-    carry = len(tl.frames)
-    op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(tool, offset))
-    lower_and_release(op, item, tool, offset, place)
-    if item["place"] != TABLE_TARGET:
-        op.look_again(side, item["place"], data, carry, len(tl.frames))
+    carry_and_place(op, data, item, tool, offset)      # then away as a pick
