@@ -11,6 +11,7 @@ from pathlib import Path
 import click
 
 from b2d_cli.media_cmd import export, show
+from b2d_cli.policy_cmd import eval_cmd, train
 from b2d_cli.tactile_cmd import tactile
 from b2d_cli.tasks_cmd import tasks
 from b2d_cli.teleop_cmd import teleop
@@ -173,7 +174,7 @@ def validate(episode) -> None:
 
 @cli.command()
 @click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "tactile-replay", "labels", "media",
-                                          "embodiments", "demos", "retarget", "teleop"]))
+                                          "embodiments", "demos", "retarget", "teleop", "policy"]))
 @click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay, tactile-replay).")
 @click.option("--steps", default=120, show_default=True,
               help="Control steps to record (recorder, replay, teleop); frames to retarget (retarget).")
@@ -184,14 +185,24 @@ def validate(episode) -> None:
 @click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26).")
 @click.option("--operator", type=click.Choice(["stream", "scripted"]), default="stream", show_default=True,
               help="demos: the scripted operator through the teleop stream, or its direct joint path.")
-def bench(part, profile, steps, workers, episodes, setting, operator) -> None:
+@click.option("--policy", "policy_name", type=click.Choice(["act", "dp"]), default="act", show_default=True,
+              help="policy: which learned policy.")
+@click.option("--config", "config_name", default="tiny", show_default=True, help="policy: its config.")
+@click.option("--train-steps", default=50, show_default=True, type=click.IntRange(min=1), help="policy: training steps.")
+@click.option("--eval-episodes", default=2, show_default=True, type=click.IntRange(min=1),
+              help="policy: closed-loop episodes timed (each policy and the baseline).")
+def bench(part, profile, steps, workers, episodes, setting, operator, policy_name, config_name, train_steps,
+          eval_episodes) -> None:
     """Print benchmark figures as JSON on stdout."""
     # Per-core figures: Mesa's software GL (llvmpipe) rasterizes on one thread per core by default, so a
     # "one core" render also used the other cores (b2d bench replay --profile paper: 5.6 fps "per core"
     # that way, 4.9 on one). 0 = on the calling thread. Read when the first GL context is made, which is
     # after this; a GPU driver ignores it; an LP_NUM_THREADS already set is kept.
     os.environ.setdefault("LP_NUM_THREADS", "0")
-    if part == "demos":
+    if part == "policy":
+        from policies.bench import run_policy_bench
+        figures = run_policy_bench(policy_name, config_name, train_steps=train_steps, eval_episodes=eval_episodes)
+    elif part == "demos":
         from teleop.demo_bench import run_demo_bench
         figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator)
     elif part == "media":
@@ -218,16 +229,21 @@ def bench(part, profile, steps, workers, episodes, setting, operator) -> None:
 # ---------------------------------------------------------------- pipeline
 
 
+DEFAULT_SETTING = "citrus_plate_loading__ur5_rh5dg2"     # the foundation setting: a small first run
+
+
 @cli.command()
-@click.option("--setting", "settings_", multiple=True, help="Setting key(s); default: every setting the scripted operator can record.")
+@click.option("--setting", "settings_", multiple=True, help=f"Setting key(s); default: {DEFAULT_SETTING}.")
+@click.option("--all", "all_settings", is_flag=True, help="Every setting the scripted operator can record.")
 @click.option("--profile", default=None, help="Sensor profile (default: $B2D_PROFILE or preview).")
 @click.option("--episodes", default=None, type=int, help="Demonstrations per setting.")
 @click.option("--eval-episodes", default=None, type=int, help="Rollouts per (setting, channel).")
 @click.option("--max-steps", default=None, type=int, help="Cap on control steps per episode.")
 @click.option("--render-workers", default=None, type=click.IntRange(min=1),
               help="Processes rendering each episode (default: $B2D_RENDER_WORKERS or 1).")
-def materialize(settings_, profile, episodes, eval_episodes, max_steps, render_workers) -> None:
-    """Materialize the whole asset chain (recordings -> ... -> evaluation table) with Dagster."""
+@click.option("--train-steps", default=None, type=click.IntRange(min=1), help="Override the policy config's training steps.")
+def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_steps, render_workers, train_steps) -> None:
+    """Materialize the whole asset chain (recordings -> episodes -> checkpoints -> rollouts -> table) with Dagster."""
     import dagster as dg
 
     from b2d_pipeline.demo import materialize_chain
@@ -235,7 +251,8 @@ def materialize(settings_, profile, episodes, eval_episodes, max_steps, render_w
     from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
     overrides = {k: v for k, v in {"profile": profile, "demo_episodes": episodes, "eval_episodes": eval_episodes,
-                                   "max_steps": max_steps, "render_workers": render_workers}.items() if v is not None}
+                                   "max_steps": max_steps, "render_workers": render_workers,
+                                   "train_steps": train_steps}.items() if v is not None}
     settings = FactorySettings.from_env(**overrides)
     for key in settings_:
         registry.parse_setting_key(key)
@@ -243,7 +260,8 @@ def materialize(settings_, profile, episodes, eval_episodes, max_steps, render_w
             raise UnknownNameError("recordable setting", key, setting_keys())
     use_default_dagster_home(settings.data_root).mkdir(parents=True, exist_ok=True)
     with dg.DagsterInstance.get() as instance:
-        results = materialize_chain(settings, list(settings_) or setting_keys(), instance,
+        chosen = setting_keys() if all_settings else (list(settings_) or [DEFAULT_SETTING])
+        results = materialize_chain(settings, chosen, instance,
                                     log=lambda m: click.echo(m, err=True))
     table = settings.data_root / "evaluation" / "evaluation_table.parquet"
     if table.exists():
@@ -258,6 +276,8 @@ cli.add_command(show)
 cli.add_command(tactile)
 cli.add_command(tasks)
 cli.add_command(teleop)
+cli.add_command(train)
+cli.add_command(eval_cmd)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,7 @@ from __future__ import annotations
 import dagster as dg
 
 from b2d_pipeline import checks, schedules
-from b2d_pipeline.assets import episodes, evaluation, recordings, renders, replays
+from b2d_pipeline.assets import episodes, evaluation, recordings, renders, replays, training
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
@@ -14,11 +14,14 @@ from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 def build_definitions(settings: FactorySettings | None = None) -> dg.Definitions:
     settings = settings or FactorySettings.from_env()
     episodes_asset = episodes.build(settings)
-    rollouts, table = evaluation.build(settings)
+    checkpoints = [training.build_checkpoint(settings, p) for p in settings.policies]
+    rollouts = [evaluation.build_baseline_rollouts(settings)] + [
+        evaluation.build_policy_rollouts(settings, p) for p in settings.policies]
     return dg.Definitions(
-        assets=[recordings.build(settings), replays.build(), renders.build(settings), episodes_asset, rollouts, table],
+        assets=[recordings.build(settings), replays.build(), renders.build(settings), episodes_asset,
+                training.build_policy_inputs(settings), *checkpoints, *rollouts, evaluation.build_table(rollouts)],
         asset_checks=checks.build(settings, episodes_asset),
-        jobs=[schedules.production_job, schedules.rerender_job],
+        jobs=[schedules.production_job, schedules.training_job, schedules.rerender_job],
         schedules=[schedules.nightly_rerender],
         sensors=[schedules.automation_sensor],
         resources={"store": EpisodeStore(data_root=str(settings.data_root))},

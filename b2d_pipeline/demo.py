@@ -1,5 +1,6 @@
-"""Materialize the whole chain for settings, in dependency order: per setting the production
-assets, then one run per (setting, channel) for the rollouts, then the result table."""
+"""Materialize the whole chain for settings, in dependency order: per setting the production assets and
+the policies' checkpoints, then one run per (setting, channel) for every policy's rollouts, then the
+result table."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from b2d_pipeline.settings import FactorySettings
 from sim.registry import channel_names
 
 PRODUCTION = ["raw_recordings", "replays", "renders", "episodes"]
+ROLLOUTS = ["scripted_operator_rollouts"]
 
 
 def materialize_chain(settings: FactorySettings, setting_keys: list[str], instance: dg.DagsterInstance,
@@ -31,10 +33,11 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                     log(f"  failed: {event.message}")
         return result
 
+    training = ["policy_inputs", *(f"{p}_checkpoint" for p in settings.policies)] if settings.policies else []
     for key in setting_keys:
-        if not run(PRODUCTION, key).success:
+        if not run(PRODUCTION + training, key).success:
             continue
         for channel in channels or channel_names():
-            run(["channel_rollouts"], setting_channel_key(key, channel))
+            run(ROLLOUTS + [f"{p}_rollouts" for p in settings.policies], setting_channel_key(key, channel))
     run(["evaluation_table"])
     return results

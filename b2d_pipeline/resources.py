@@ -31,6 +31,9 @@ class EpisodeStore(dg.ConfigurableResource):
     def episode_dir(self, profile_hash: str, setting: str) -> Path:
         return self.root / "episodes" / profile_hash / setting
 
+    def checkpoint_dir(self, policy: str, config: str, setting: str) -> Path:
+        return self.root / "checkpoints" / f"{policy}_{config}" / setting
+
     def rollout_path(self, policy: str, setting: str, channel: str) -> Path:
         return self.root / "evaluation" / "rollouts" / policy / setting / f"{channel}.parquet"
 

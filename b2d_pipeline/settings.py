@@ -24,6 +24,9 @@ class FactorySettings:
     eval_episodes: int          # rollouts per (setting, channel)
     max_steps: int | None       # cap on control steps per episode (tests, quick looks)
     render_workers: int = 1     # processes rendering one episode's frames (same arrays for any count)
+    policies: tuple[str, ...] = ("act", "dp")   # learned policies trained and evaluated per setting
+    policy_config: str = "tiny"                 # their config (policies/configs/<policy>/<name>.yaml)
+    train_steps: int | None = None              # override the config's training steps (quick runs)
 
     @classmethod
     def from_env(cls, **overrides) -> "FactorySettings":
@@ -35,11 +38,20 @@ class FactorySettings:
             eval_episodes=int(os.environ.get("B2D_EVAL_EPISODES", "2")),
             max_steps=int(max_steps) if max_steps else None,
             render_workers=int(os.environ.get("B2D_RENDER_WORKERS", "1")),
+            policies=tuple(p for p in os.environ.get("B2D_POLICIES", "act,dp").split(",") if p),
+            policy_config=os.environ.get("B2D_POLICY_CONFIG", "tiny"),
+            train_steps=int(os.environ["B2D_TRAIN_STEPS"]) if os.environ.get("B2D_TRAIN_STEPS") else None,
         )
         values.update(overrides)
         if isinstance(values["profile"], str):
             values["profile"] = sensor_profile(values["profile"])
+        values["policies"] = tuple(values["policies"])
         return cls(**values)
+
+    def policy_configs(self) -> dict:
+        """{policy: its PolicyConfig} of the learned policies in use; unknown names fail fast."""
+        from policies.config import load_policy_config
+        return {p: load_policy_config(p, self.policy_config) for p in self.policies}
 
 
 def default_dagster_home(data_root: Path | None = None) -> Path:

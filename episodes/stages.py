@@ -194,7 +194,8 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
         labels = [m for m in schema.LABEL_MODALITIES if m in profile.modalities]
         if labels and schema.LABEL_ID_NODES[0].path not in ren:
             raise SpecError(render_path, "labels", f"label frames (profile '{profile.name}' lists {labels}; re-render)")
-        modalities = ["rgb", "depth", "robot_state", "object_state"] + (["tactile"] if has_tactile else []) + labels
+        cameras = [m for m in ("rgb", "depth") if m in profile.modalities]    # a policy-input profile may be RGB only
+        modalities = cameras + ["robot_state", "object_state"] + (["tactile"] if has_tactile else []) + labels
         static = {
             "meta/task": task.name, "meta/embodiment": attrs["embodiment"], "meta/instruction": task.instruction,
             "meta/scene": attrs["scene_sample"], "meta/modalities": json.dumps(modalities),

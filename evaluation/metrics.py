@@ -5,7 +5,7 @@ task-macro means (paper appendix "Evaluation Metrics"). Undefined quantities are
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -51,25 +51,79 @@ def _mean(series: pd.Series) -> float:
     return float(s.mean()) if len(s) else np.nan
 
 
-def _cell(g: pd.DataFrame, n_boot: int, seed: int) -> dict:
-    s = g["success"].astype(bool).to_numpy()
+def _flag(series: pd.Series) -> pd.Series:
+    """Boolean flags with a missing value (None / NaN / NA, e.g. an error row without flags) as False;
+    a plain ``astype(bool)`` would turn NaN into True."""
+    s = series.astype(object)
+    return s.where(s.notna(), False).astype(bool)
+
+
+def _count(series: pd.Series) -> pd.Series:
+    """Step counts with a missing value as 0 (an error row that recorded no steps executed none)."""
+    return pd.to_numeric(series, errors="coerce").fillna(0.0)
+
+
+def _errors(g: pd.DataFrame) -> pd.Series:
+    """Episodes that ended because evaluation could not proceed (termination "error")."""
+    return g["termination"].eq("error") if "termination" in g else pd.Series(False, index=g.index)
+
+
+def _progress(g: pd.DataFrame, column: str, err: pd.Series) -> pd.Series:
+    """Per-episode LSCR / CSCR with error episodes in the denominator: an error episode keeps a value
+    it recorded (progress over the updates it executed) and counts 0 without one. A cell whose
+    non-error episodes all leave the value undefined has no stages (K = 0): it stays undefined."""
+    v = pd.to_numeric(g[column], errors="coerce")
+    staged = v.notna().any() or bool(err.all())
+    return v.mask(err & v.isna(), 0.0) if staged else v
+
+
+def _te(g: pd.DataFrame, s: np.ndarray, expert_time_s: Mapping | None) -> tuple[pd.Series, str]:
+    """Per-episode TE_e = t_expert / t_stable over successful episodes, and which reference was used.
+
+    The reference is the recorded expert time of the setting's demonstrations when there is one, else
+    the configured one: ``expert_time_s[(task, embodiment)]``, then a row's ``t_expert_recorded``,
+    then the configured TE the evaluator wrote (``te``, from ``expert_horizon_steps`` x dt)."""
+    configured = pd.to_numeric(g["te"], errors="coerce") if "te" in g else pd.Series(np.nan, index=g.index)
+    recorded = (pd.to_numeric(g["t_expert_recorded"], errors="coerce") if "t_expert_recorded" in g
+                else pd.Series(np.nan, index=g.index))
+    if expert_time_s is not None:
+        given = pd.Series([expert_time_s.get((t, e)) for t, e in zip(g["task"], g["embodiment"])],
+                          index=g.index, dtype=object)
+        recorded = pd.to_numeric(given, errors="coerce").fillna(recorded)
+    recorded = recorded.where(recorded > 0)
+    t_stable = pd.to_numeric(g["t_stable"], errors="coerce")
+    from_recorded = recorded / t_stable.where(t_stable > 0)
+    use = recorded.notna()
+    te = from_recorded.where(use, configured).where(s)
+    defined = te.notna()
+    kinds = [k for k, m in (("recorded", use), ("configured", ~use)) if (defined & m).any()]
+    return te, "+".join(kinds)
+
+
+def _cell(g: pd.DataFrame, n_boot: int, seed: int, expert_time_s: Mapping | None = None) -> dict:
+    err = _errors(g)
+    s = (_flag(g["success"]) & ~err).to_numpy()  # paper: an error episode counts as unsuccessful
     lo, hi = bootstrap_ci(s.astype(float), n_boot, seed)
     t = pd.to_numeric(g.loc[s, "t_stable"], errors="coerce")
+    steps, violations = _count(g["n_steps"]), _count(g["violation_steps"])
+    flag = lambda name: float(_flag(g[name]).mean())  # noqa: E731
     row = {
         "N": len(g), "n_success": int(s.sum()), "SR": float(s.mean()), "SR_ci_low": lo, "SR_ci_high": hi,
-        "LSCR": _mean(g["lscr"]), "t_succ": float(t.mean()) if s.any() else np.nan,
+        "LSCR": _mean(_progress(g, "lscr", err)), "t_succ": float(t.mean()) if s.any() else np.nan,
         "t_succ_note": "" if s.any() else "undefined: no successful episode",
-        "SafeSR": float(g["safe_success"].astype(bool).mean()), "HVR": float(g["hard_violation"].astype(bool).mean()),
-        "DropR": float(g["drop"].astype(bool).mean()), "HSR": float(g["high_speed"].astype(bool).mean()),
-        "VSR_step": float(g["violation_steps"].sum() / g["n_steps"].sum()) if g["n_steps"].sum() else np.nan,
-        "ISR_ever": float(g["isr_ever"].astype(bool).mean()), "SR_final": float(g["success_final"].astype(bool).mean()),
-        "CSCR": _mean(g["cscr"]),
+        "SafeSR": float((_flag(g["safe_success"]).to_numpy() & s).mean()), "HVR": flag("hard_violation"),
+        "DropR": flag("drop"), "HSR": flag("high_speed"),
+        "VSR_step": float(violations.sum() / steps.sum()) if steps.sum() else np.nan,
+        "ISR_ever": flag("isr_ever"), "SR_final": flag("success_final"),
+        "CSCR": _mean(_progress(g, "cscr", err)),
     }
-    for name, column in (("TE", "te"), ("GSI", "gsi"), ("GSI_mean", "gsi_mean")):
+    te, source = _te(g, s, expert_time_s)
+    row["TE"], row["TE_source"] = _mean(te), source
+    for name, column in (("GSI", "gsi"), ("GSI_mean", "gsi_mean")):
         row[name] = _mean(g[column]) if column in g else np.nan
     row.update(_tool_and_motion(g))
-    row["n_errors"] = int((g["termination"] == "error").sum()) if "termination" in g else 0
-    row["mean_steps"] = float(g["n_steps"].mean())
+    row["n_errors"] = int(err.sum())
+    row["mean_steps"] = float(steps.mean())
     return row
 
 
@@ -89,13 +143,36 @@ def _tool_and_motion(g: pd.DataFrame) -> dict:
     return row
 
 
-def cell_metrics(records, by: Sequence[str] = CELL, n_boot: int = N_BOOT, seed: int = SEED) -> pd.DataFrame:
-    """Core and diagnostic metrics per cell (default: task, policy, channel), one row each."""
+def cell_metrics(records, by: Sequence[str] = CELL, n_boot: int = N_BOOT, seed: int = SEED,
+                 expert_time_s: Mapping[tuple[str, str], float | None] | None = None) -> pd.DataFrame:
+    """Core and diagnostic metrics per cell (default: task, policy, channel), one row each.
+
+    Error episodes (termination "error", e.g. the bare ``{labels, success: False, termination: "error",
+    error}`` rows of ``teleop/rollouts.py`` run_rollouts) stay in every denominator as failures (paper):
+    S_e = 0 whatever they recorded, missing flags are False (so SafeSR <= SR), LSCR_e / CSCR_e are 0
+    unless recorded, and their recorded ``n_steps`` / ``violation_steps`` count in VSR_step (missing: 0
+    steps). No ``fillna`` by the caller is needed; columns of NEEDED may be absent only when every
+    episode is an error episode.
+
+    TE: ``expert_time_s`` maps (task, embodiment) to the recorded expert time in seconds of that
+    setting's demonstrations (None: no recording); a row's ``t_expert_recorded`` column serves the same
+    purpose. A recorded reference takes precedence over the configured one (the evaluator's ``te``,
+    ``expert_horizon_steps`` x dt): TE_e = t_expert / t_stable per successful episode, in the order
+    ``expert_time_s`` > ``t_expert_recorded`` > ``te``. ``TE_source`` says which was used
+    ("recorded", "configured", both joined by "+", or "" when TE is undefined).
+    """
     df = episode_table(records)
-    missing = [c for c in (*by, *NEEDED) if c not in df.columns]
+    missing = [c for c in by if c not in df.columns]
+    if expert_time_s is not None:
+        missing += [c for c in ("task", "embodiment") if c not in df.columns and c not in missing]
     if missing:
         raise ValueError(f"episode table lacks columns {missing}")
-    rows = [{**dict(zip(by, key if isinstance(key, tuple) else (key,))), **_cell(g, n_boot, seed)}
+    absent = [c for c in NEEDED if c not in df.columns]
+    if absent:
+        if "success" in absent or not len(df) or not _errors(df).all():
+            raise ValueError(f"episode table lacks columns {absent}")
+        df = df.assign(**{c: np.nan for c in absent})  # only error episodes: nothing was recorded
+    rows = [{**dict(zip(by, key if isinstance(key, tuple) else (key,))), **_cell(g, n_boot, seed, expert_time_s)}
             for key, g in df.groupby(list(by), sort=True)]
     return pd.DataFrame(rows)
 

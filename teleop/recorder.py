@@ -75,11 +75,14 @@ def new_buffer(scene: Scene, n_stages: int) -> StepBuffer:
 
 
 def record_step(observer: SceneObserver, evaluator: EpisodeEvaluator, buf: StepBuffer,
-                data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = ""):
+                data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = "",
+                policy_query: bool | None = None):
     """The recorder's work after one control step: snapshot, evaluator update, store (with the
     operator stream's flags for the step and, when flagged, why). `b2d bench recorder` times the
-    same three calls one by one."""
-    record = evaluator.update(observer.state(data), physics.CONTROL_DT)
+    same three calls one by one. ``policy_query``: the closed-loop runner says whether the policy was
+    queried this step, and the evaluator then counts control steps and queries (None: not counted)."""
+    counts = {} if policy_query is None else {"control_step": True, "policy_query": policy_query}
+    record = evaluator.update(observer.state(data), physics.CONTROL_DT, **counts)
     store_step(observer, buf, data, action, record, flags, reasons)
     return record
 
@@ -132,14 +135,15 @@ class EpisodeRecording:
     def steps(self) -> int:
         return self.buf.count
 
-    def step(self, data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = ""):
-        return record_step(self.observer, self.evaluator, self.buf, data, action, flags, reasons)
+    def step(self, data: mujoco.MjData, action: np.ndarray, flags: int = 0, reasons: str = "",
+             policy_query: bool | None = None):
+        return record_step(self.observer, self.evaluator, self.buf, data, action, flags, reasons, policy_query)
 
     def finish(self, episode_id: str, seed: int, operator: str, termination: str | None = None,
-               extra: dict | None = None) -> RawRecording:
+               extra: dict | None = None, error: str | None = None) -> RawRecording:
         scene, model = self.scene, self.scene.model
         result = self.evaluator.result(termination=termination or ("stable_success" if self.evaluator.stable
-                                                                   else "horizon"))
+                                                                   else "horizon"), error=error)
         return RawRecording(
             task=scene.task.name, embodiment=scene.layout.embodiment, episode_id=episode_id, seed=seed,
             scene_sample=scene.sample.to_json(), operator=operator, control_hz=physics.CONTROL_HZ,

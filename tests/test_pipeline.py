@@ -12,7 +12,8 @@ from b2d_pipeline.demo import materialize_chain
 from b2d_pipeline.settings import FactorySettings
 SETTING = "citrus_plate_loading__ur5_rh5dg2"
 
-ASSETS = {"raw_recordings", "replays", "renders", "episodes", "channel_rollouts", "evaluation_table"}
+ASSETS = {"raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint", "dp_checkpoint",
+          "scripted_operator_rollouts", "act_rollouts", "dp_rollouts", "evaluation_table"}
 
 
 def test_definitions_load():
@@ -34,16 +35,28 @@ def test_profile_change_changes_render_code_version(tmp_path):
 
 def test_materialize_whole_chain(tmp_path):
     settings = FactorySettings.from_env(data_root=tmp_path, profile="preview", demo_episodes=1,
-                                        eval_episodes=1, max_steps=12)
+                                        eval_episodes=1, max_steps=12, train_steps=2)
     with dg.DagsterInstance.ephemeral() as instance:
         results = materialize_chain(settings, [SETTING], instance, channels=["none", "inv_equi"], log=lambda m: None)
     assert all(r.success for r in results)
     profile_hash = settings.profile.content_hash
     assert list((tmp_path / "episodes" / profile_hash / SETTING).glob("episode_*.hdf5"))
+    for policy in ("act", "dp"):
+        assert (tmp_path / "checkpoints" / f"{policy}_tiny" / SETTING / "model.safetensors").is_file()
     table = pd.read_parquet(tmp_path / "evaluation" / "evaluation_table.parquet")
     assert set(table["channel"]) == {"none", "inv_equi"}
+    assert set(table["policy"]) == {"scripted_operator", "act_tiny", "dp_tiny"}
     assert {"SR", "LSCR", "N"} <= set(table.columns)
     assert (table["N"] == 1).all()
+
+
+def test_a_changed_policy_config_changes_the_checkpoint_code_version(tmp_path):
+    tiny = build_definitions(FactorySettings.from_env(data_root=tmp_path))
+    fewer = build_definitions(FactorySettings.from_env(data_root=tmp_path, train_steps=7))
+    paper = build_definitions(FactorySettings.from_env(data_root=tmp_path, policy_config="paper"))
+    versions = [d.resolve_assets_def("act_checkpoint").code_versions_by_key[dg.AssetKey("act_checkpoint")]
+                for d in (tiny, fewer, paper)]
+    assert len(set(versions)) == 3
 
 
 def test_bad_recording_fails_its_partition_and_keeps_the_rest(tmp_path, raw_path):

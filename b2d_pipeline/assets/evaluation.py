@@ -1,7 +1,6 @@
-"""Per-channel evaluation rollouts and the benchmark's result table."""
+"""Per-channel evaluation rollouts of every policy (one asset per policy, from a factory) and the
+benchmark's result table over all of them."""
 
-
-import json
 
 import dagster as dg
 import pandas as pd
@@ -10,65 +9,85 @@ from b2d_pipeline.assets.common import data_version
 from b2d_pipeline.partitions import setting_channel_partitions
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.settings import FactorySettings
-from episodes.atomic import atomic_path
-from episodes.reader import EpisodeReader
 from evaluation.metrics import cell_metrics, channel_robustness
+from policies.anchors import checkpoint_anchors, episode_anchors
+from policies.records import records_frame, write_records
+from policies.rollouts import run_rollouts
+from policies.scripted_baseline import ScriptedBaseline
 from sim.registry import parse_setting_key
-from sim.scene.sample import SceneSample
-from teleop.rollouts import run_rollouts
 
-POLICY = "scripted_operator"
+BASELINE = "scripted_operator"
 CELL = ("task", "embodiment", "policy", "channel")
 
 
-def _write_parquet(df: pd.DataFrame, path) -> None:
-    with atomic_path(path) as tmp:
-        df.to_parquet(tmp, index=False)
+def _rollout_result(store: EpisodeStore, rows: list[dict], policy: str, setting: str, channel: str,
+                    anchors: int) -> dg.MaterializeResult:
+    df = records_frame(rows)
+    out = write_records(df, store.rollout_path(policy, setting, channel))
+    described = store.describe([out])
+    errors = int((df.get("termination") == "error").sum()) if "termination" in df else 0
+    return dg.MaterializeResult(
+        metadata={"rollouts": len(df), "successes": int(df["success"].sum()), "errors": errors, "anchors": anchors,
+                  "file": dg.MetadataValue.path(str(out))},
+        data_version=data_version(described))
 
 
-def build(settings: FactorySettings):
+def build_baseline_rollouts(settings: FactorySettings):
     profile = settings.profile
 
-    @dg.asset(partitions_def=setting_channel_partitions, group_name="evaluation", deps=["episodes"],
-              code_version="2", description="Scripted-operator rollouts per channel, anchored on the recorded episodes.")
-    def channel_rollouts(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
+    # 3: rollouts through the policy interface's closed-loop runner (control steps and queries counted)
+    @dg.asset(name=f"{BASELINE}_rollouts", partitions_def=setting_channel_partitions, group_name="evaluation",
+              deps=["episodes"], code_version="3",
+              description="The privileged scripted baseline (reads the simulator, no images) per channel, anchored "
+                          "on the recorded episodes.")
+    def rollouts(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         keys = context.partition_key.keys_by_dimension
         setting = parse_setting_key(keys["setting"])
-        anchors = []
-        for path in sorted(store.episode_dir(profile.content_hash, keys["setting"]).glob("episode_*.hdf5")):
-            with EpisodeReader(path) as r:
-                anchors.append((path.stem, SceneSample.from_json(json.dumps(r.meta("scene")))))
-        rows = run_rollouts(setting.task, setting.embodiment, keys["channel"], anchors,
-                            settings.eval_episodes, max_steps=settings.max_steps, policy=POLICY)
-        df = pd.DataFrame(rows)
-        for col in df.columns:   # nested lists/dicts -> JSON text so parquet stays flat
-            if df[col].map(lambda v: isinstance(v, (list, dict))).any():
-                df[col] = df[col].map(json.dumps)
-        out = store.rollout_path(POLICY, keys["setting"], keys["channel"])
-        _write_parquet(df, out)
-        described = store.describe([out])
-        return dg.MaterializeResult(
-            metadata={"rollouts": len(df), "successes": int(df["success"].sum()), "anchors": len(anchors),
-                      "file": dg.MetadataValue.path(str(out))},
-            data_version=data_version(described))
+        anchors = episode_anchors(list(store.episode_dir(profile.content_hash, keys["setting"]).glob("episode_*.hdf5")))
+        rows = run_rollouts(ScriptedBaseline(), setting.task, setting.embodiment, keys["channel"], anchors,
+                            settings.eval_episodes, max_steps=settings.max_steps)
+        return _rollout_result(store, rows, BASELINE, keys["setting"], keys["channel"], len(anchors))
 
-    @dg.asset(group_name="evaluation", deps=[channel_rollouts], code_version="1",
+    return rollouts
+
+
+def build_policy_rollouts(settings: FactorySettings, policy: str):
+    cfg = settings.policy_configs()[policy]
+
+    @dg.asset(name=f"{policy}_rollouts", partitions_def=setting_channel_partitions, group_name="evaluation",
+              deps=[f"{policy}_checkpoint"], code_version="1",
+              description=f"{policy.upper()} ({cfg.name}) in closed loop per channel: its views rendered online at "
+                          "20 Hz, anchored on its training scenes.")
+    def rollouts(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
+        from policies.learned import LearnedPolicy
+
+        keys = context.partition_key.keys_by_dimension
+        setting = parse_setting_key(keys["setting"])
+        learned = LearnedPolicy(store.checkpoint_dir(policy, cfg.name, keys["setting"]))
+        anchors = checkpoint_anchors(learned.checkpoint.manifest)
+        rows = run_rollouts(learned, setting.task, setting.embodiment, keys["channel"], anchors,
+                            settings.eval_episodes, max_steps=settings.max_steps)
+        return _rollout_result(store, rows, learned.name, keys["setting"], keys["channel"], len(anchors))
+
+    return rollouts
+
+
+def build_table(rollout_assets: list):
+    @dg.asset(group_name="evaluation", deps=rollout_assets, code_version="2",
               automation_condition=dg.AutomationCondition.eager().without(~dg.AutomationCondition.any_deps_missing()),
               description="Stable success, LSCR and the paper's metric suite per (task, embodiment, policy, channel).")
     def evaluation_table(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         files = sorted((store.root / "evaluation" / "rollouts").glob("*/*/*.parquet"))
         if not files:
-            raise dg.Failure("no channel rollouts found; materialize channel_rollouts first")
+            raise dg.Failure("no rollouts found; materialize the *_rollouts assets first")
         rollouts = pd.concat([pd.read_parquet(f) for f in files], ignore_index=True)
         for col in ("lscr", "cscr", "t_stable"):
             rollouts[col] = pd.to_numeric(rollouts.get(col), errors="coerce")
-        cells = cell_metrics(rollouts.fillna({"hard_violation": False, "drop": False, "high_speed": False,
-                                              "safe_success": False, "isr_ever": False, "success_final": False,
-                                              "violation_steps": 0, "n_steps": 0}), by=CELL)
+        cells = cell_metrics(rollouts, by=CELL)
         robustness = channel_robustness(cells, by=("task", "embodiment", "policy"))
         out = store.evaluation_table_path()
-        _write_parquet(cells, out)
-        _write_parquet(robustness, out.with_name("channel_robustness.parquet"))
+        write_records(cells, out)
+        write_records(robustness, out.with_name("channel_robustness.parquet"))
         described = store.describe([out, out.with_name("channel_robustness.parquet")])
         preview = cells[[*CELL, "SR", "LSCR", "N"]] if {"SR", "LSCR", "N"} <= set(cells.columns) else cells
         return dg.MaterializeResult(
@@ -76,4 +95,4 @@ def build(settings: FactorySettings):
                       "path": dg.MetadataValue.path(str(out))},
             data_version=data_version(described))
 
-    return channel_rollouts, evaluation_table
+    return evaluation_table
