@@ -73,14 +73,24 @@ def _rows(kind: str) -> list[dict]:
         return rows
     if kind == "channels":
         return [vars(registry.channel(c)) for c in registry.channel_names()]
+    if kind == "policies":
+        from policies.config import LEARNED_POLICIES, config_names, load_policy_config
+        rows = [{"name": "scripted_operator", "description": "privileged baseline: the scripted person, reads the "
+                 "simulator, no images", "sensor_profile": None, "hash": None}]
+        for policy in LEARNED_POLICIES:
+            for name in config_names(policy):
+                cfg = load_policy_config(policy, name)
+                rows.append({"name": f"{policy}_{name}", "description": cfg.description,
+                             "sensor_profile": cfg.observation.sensor_profile, "hash": cfg.content_hash})
+        return rows
     raise AssertionError(kind)
 
 
 @cli.command("list")
-@click.argument("kind", type=click.Choice(["embodiments", "tasks", "settings", "profiles", "channels"]))
+@click.argument("kind", type=click.Choice(["embodiments", "tasks", "settings", "profiles", "channels", "policies"]))
 @click.option("--json", "as_json", is_flag=True, help="Print a JSON list.")
 def list_cmd(kind: str, as_json: bool) -> None:
-    """List embodiments, tasks, settings, sensor profiles or channels."""
+    """List embodiments, tasks, settings, sensor profiles, channels or policies (and their configs)."""
     rows = _rows(kind)
     if as_json:
         click.echo(json.dumps(rows, indent=2))
@@ -246,7 +256,8 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
     """Materialize the whole asset chain (recordings -> episodes -> checkpoints -> rollouts -> table) with Dagster."""
     import dagster as dg
 
-    from b2d_pipeline.demo import materialize_chain
+    from b2d_pipeline.chain import materialize_chain
+    from b2d_pipeline.instance import ensure_instance_yaml
     from b2d_pipeline.partitions import setting_keys
     from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
@@ -258,7 +269,7 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
         registry.parse_setting_key(key)
         if key not in setting_keys():    # the partitions hold only settings the operator can record
             raise UnknownNameError("recordable setting", key, setting_keys())
-    use_default_dagster_home(settings.data_root).mkdir(parents=True, exist_ok=True)
+    ensure_instance_yaml(use_default_dagster_home(settings.data_root))
     with dg.DagsterInstance.get() as instance:
         chosen = setting_keys() if all_settings else (list(settings_) or [DEFAULT_SETTING])
         results = materialize_chain(settings, chosen, instance,

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dagster as dg
 
-from b2d_pipeline import checks, schedules
+from b2d_pipeline import checks, jobs, schedules
 from b2d_pipeline.assets import episodes, evaluation, recordings, renders, replays, training
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
@@ -21,7 +21,7 @@ def build_definitions(settings: FactorySettings | None = None) -> dg.Definitions
         assets=[recordings.build(settings), replays.build(), renders.build(settings), episodes_asset,
                 training.build_policy_inputs(settings), *checkpoints, *rollouts, evaluation.build_table(rollouts)],
         asset_checks=checks.build(settings, episodes_asset),
-        jobs=[schedules.production_job, schedules.training_job, schedules.rerender_job],
+        jobs=jobs.ALL,
         schedules=[schedules.nightly_rerender],
         sensors=[schedules.automation_sensor],
         resources={"store": EpisodeStore(data_root=str(settings.data_root))},

@@ -5,20 +5,8 @@ from __future__ import annotations
 
 import dagster as dg
 
+from b2d_pipeline.jobs import rerender_job
 from b2d_pipeline.partitions import settings_partitions
-
-production_job = dg.define_asset_job(
-    "produce_episodes", selection=["raw_recordings", "replays", "renders", "episodes"],
-    description="Record, replay, render and write the HDF5 episodes of a setting.")
-
-training_job = dg.define_asset_job(
-    "train_policies", selection=dg.AssetSelection.groups("training"),
-    description="Render the policies' inputs from stored replays and train each policy's checkpoint.")
-
-rerender_job = dg.define_asset_job(
-    "rerender_episodes", selection=["renders", "episodes"],
-    description="Re-render stored replays under the active sensor profile (no re-simulation).")
-
 
 @dg.schedule(job=rerender_job, cron_schedule="0 2 * * *", default_status=dg.DefaultScheduleStatus.STOPPED)
 def nightly_rerender(context: dg.ScheduleEvaluationContext):

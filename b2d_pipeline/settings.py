@@ -48,6 +48,16 @@ class FactorySettings:
         values["policies"] = tuple(values["policies"])
         return cls(**values)
 
+    def to_env(self) -> dict[str, str]:
+        """The environment that `from_env` reads these settings back from: how a run's step processes
+        (Dagster's multiprocess executor) rebuild the same definitions."""
+        env = {"B2D_DATA_ROOT": str(self.data_root), "B2D_PROFILE": self.profile.name,
+               "B2D_DEMO_EPISODES": str(self.demo_episodes), "B2D_EVAL_EPISODES": str(self.eval_episodes),
+               "B2D_MAX_STEPS": str(self.max_steps or ""), "B2D_RENDER_WORKERS": str(self.render_workers),
+               "B2D_POLICIES": ",".join(self.policies), "B2D_POLICY_CONFIG": self.policy_config,
+               "B2D_TRAIN_STEPS": str(self.train_steps or "")}
+        return env
+
     def policy_configs(self) -> dict:
         """{policy: its PolicyConfig} of the learned policies in use; unknown names fail fast."""
         from policies.config import load_policy_config

@@ -22,7 +22,7 @@ def unplanned() -> str:
 
 def test_list_json():
     runner = CliRunner()
-    for kind in ("embodiments", "tasks", "settings", "profiles", "channels"):
+    for kind in ("embodiments", "tasks", "settings", "profiles", "channels", "policies"):
         result = runner.invoke(cli, ["list", kind, "--json"])
         assert result.exit_code == 0, result.output
         rows = json.loads(result.output)

@@ -8,7 +8,7 @@ import dagster as dg
 import pandas as pd
 
 from b2d_pipeline.definitions import build_definitions, defs
-from b2d_pipeline.demo import materialize_chain
+from b2d_pipeline.chain import materialize_chain
 from b2d_pipeline.settings import FactorySettings
 SETTING = "citrus_plate_loading__ur5_rh5dg2"
 
@@ -36,9 +36,16 @@ def test_profile_change_changes_render_code_version(tmp_path):
 def test_materialize_whole_chain(tmp_path):
     settings = FactorySettings.from_env(data_root=tmp_path, profile="preview", demo_episodes=1,
                                         eval_episodes=1, max_steps=12, train_steps=2)
-    with dg.DagsterInstance.ephemeral() as instance:
-        results = materialize_chain(settings, [SETTING], instance, channels=["none", "inv_equi"], log=lambda m: None)
+    lines = []
+    (tmp_path / "dagster_home").mkdir()
+    with dg.instance_for_test(temp_dir=str(tmp_path / "dagster_home")) as instance:
+        results = materialize_chain(settings, [SETTING], instance, channels=["none", "inv_equi"], log=lines.append,
+                                    processes=2)
+        runs = instance.get_runs()
+        assert sorted(r.job_name for r in runs) == ["build_evaluation_table", "evaluate_policies",
+                                                    "evaluate_policies", "produce_and_train"]
     assert all(r.success for r in results)
+    assert lines[0].startswith("[1/4] produce_and_train [citrus_plate_loading__ur5_rh5dg2]  elapsed 0:00")
     profile_hash = settings.profile.content_hash
     assert list((tmp_path / "episodes" / profile_hash / SETTING).glob("episode_*.hdf5"))
     for policy in ("act", "dp"):
@@ -84,3 +91,31 @@ def test_dagster_home_follows_the_data_root(tmp_path):
     out = subprocess.run([sys.executable, "-c", "import os, b2d_pipeline.definitions; print(os.environ['DAGSTER_HOME'])"],
                          env=env, capture_output=True, text=True, check=True).stdout.strip()
     assert out == str(tmp_path / "dagster_home")
+
+
+def test_the_project_writes_its_dagster_yaml_once(tmp_path):
+    import yaml
+
+    from b2d_pipeline.instance import ensure_instance_yaml
+
+    path = ensure_instance_yaml(tmp_path / "home")
+    config = yaml.safe_load(path.read_text())
+    assert config["telemetry"] == {"enabled": False} and config["run_queue"]["max_concurrent_runs"] >= 1
+    with dg.DagsterInstance.from_config(str(tmp_path / "home")) as instance:   # Dagster accepts what b2d writes
+        assert instance.run_coordinator is not None
+    path.write_text("telemetry:\n  enabled: true\n")          # a user's own settings are kept
+    ensure_instance_yaml(tmp_path / "home")
+    assert path.read_text() == "telemetry:\n  enabled: true\n"
+
+
+def test_the_run_plan_covers_every_policy_and_channel():
+    from b2d_pipeline.chain import run_plan
+
+    plan = run_plan(FactorySettings.from_env(), [SETTING], channels=["none", "inv_only"])
+    assert [p[1] for p in plan] == ["produce_and_train", "evaluate_policies", "evaluate_policies",
+                                    "build_evaluation_table"]
+    jobs = {name: defs.resolve_job_def(name) for name in ("produce_and_train", "evaluate_policies")}
+    assert {k.to_user_string() for k in jobs["evaluate_policies"].asset_layer.selected_asset_keys} == {
+        "scripted_operator_rollouts", "act_rollouts", "dp_rollouts"}
+    assert {k.to_user_string() for k in jobs["produce_and_train"].asset_layer.selected_asset_keys} == {
+        "raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint", "dp_checkpoint"}

@@ -1,0 +1,106 @@
+"""Run the whole chain for settings through the project's Dagster jobs, in dependency order: per setting
+`produce_and_train` (demonstrations to checkpoints), then `evaluate_policies` for each (setting, channel),
+then `build_evaluation_table`. Each run goes on the instance under the job's name (the UI lists it) with
+Dagster's multiprocess executor, so independent steps (renders beside policy inputs, ACT beside DP, one
+policy's rollouts beside another's) use both cores. Dagster's own log lines go to the run storage, not
+the terminal; the terminal shows one progress line per run: done/total, job and partition, elapsed, ETA.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+
+import dagster as dg
+
+from b2d_pipeline.definitions import build_definitions
+from b2d_pipeline.partitions import setting_channel_key, setting_channel_partitions
+from b2d_pipeline.settings import FactorySettings
+from sim.registry import channel_names
+
+QUIET_LOGS = {"loggers": {"console": {"config": {"log_level": "ERROR"}}}}
+
+
+def _job(name: str) -> dg.JobDefinition:
+    # rebuilt in every step process from the environment that `materialize_chain` sets
+    return build_definitions(FactorySettings.from_env()).resolve_job_def(name)
+
+
+def produce_and_train() -> dg.JobDefinition:
+    return _job("produce_and_train")
+
+
+def evaluate_policies() -> dg.JobDefinition:
+    return _job("evaluate_policies")
+
+
+def build_evaluation_table() -> dg.JobDefinition:
+    return _job("build_evaluation_table")
+
+
+JOBS = {f.__name__: f for f in (produce_and_train, evaluate_policies, build_evaluation_table)}
+
+
+def run_plan(settings: FactorySettings, setting_keys: list[str], channels: list[str] | None = None) -> list[tuple]:
+    """[(setting or None, job name, partition key or None)] in the order they run."""
+    plan = []
+    for key in setting_keys:
+        plan.append((key, "produce_and_train", key))
+        plan += [(key, "evaluate_policies", setting_channel_key(key, c)) for c in channels or channel_names()]
+    plan.append((None, "build_evaluation_table", None))
+    return plan
+
+
+@contextlib.contextmanager
+def _environment(values: dict[str, str]):
+    saved = {k: os.environ.get(k) for k in values}
+    os.environ.update(values)
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _clock(seconds: float) -> str:
+    return f"{int(seconds) // 60}:{int(seconds) % 60:02d}"
+
+
+def materialize_chain(settings: FactorySettings, setting_keys: list[str], instance: dg.DagsterInstance,
+                      channels: list[str] | None = None, log=print, processes: int | None = None) -> list:
+    """Run the plan on `instance` (a persistent one: step processes write to it). `processes`: steps run
+    side by side at most (default: the machine's cores; 1 runs each run in one process)."""
+    processes = processes or os.cpu_count() or 1
+    # forkserver: step processes fork from one that has imported the project already (~2 s saved a step)
+    executor = ({"multiprocess": {"max_concurrent": processes, "start_method": {
+                    "forkserver": {"preload_modules": ["b2d_pipeline.definitions"]}}}}
+                if processes > 1 else {"in_process": {}})
+    run_config = {**QUIET_LOGS, "execution": {"config": executor}}
+    plan = run_plan(settings, setting_keys, channels)
+    results, failed_settings, started = [], set(), time.perf_counter()
+    with _environment(settings.to_env()):
+        for done, (setting, job, partition) in enumerate(plan):
+            if setting in failed_settings:
+                continue                              # its production failed: nothing to evaluate
+            elapsed = time.perf_counter() - started
+            eta = f"ETA {_clock(elapsed / done * (len(plan) - done))}" if done else "ETA -"
+            where = f" [{partition}]" if partition else ""
+            log(f"[{done + 1}/{len(plan)}] {job}{where}  elapsed {_clock(elapsed)}  {eta}")
+            tags = (setting_channel_partitions.get_tags_for_partition_key(partition)
+                    if isinstance(partition, dg.MultiPartitionKey) else {"dagster/partition": partition} if partition
+                    else {})
+            result = dg.execute_job(dg.reconstructable(JOBS[job]), instance, run_config=run_config, tags=tags)
+            results.append(result)
+            if not result.success:
+                for event in result.all_events:
+                    if event.is_step_failure:
+                        message = str(event.event_specific_data.error.message).strip()
+                        log(f"  failed: {event.step_key}: {message[:500]}")
+                if job == "produce_and_train":
+                    failed_settings.add(setting)
+    log(f"done in {_clock(time.perf_counter() - started)}")
+    return results

@@ -1,0 +1,30 @@
+"""The project's Dagster instance settings: written as `dagster.yaml` into DAGSTER_HOME when it has none, so
+that a first run prints no telemetry banner and no missing-file warning, and the run queue matches the machine."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import yaml
+
+from episodes.atomic import write_text_atomic
+
+
+def instance_config(cores: int | None = None) -> dict:
+    cores = cores or os.cpu_count() or 1
+    return {
+        "telemetry": {"enabled": False},
+        # one run per core: each run renders, simulates or trains on one core
+        "run_queue": {"max_concurrent_runs": cores},
+    }
+
+
+def ensure_instance_yaml(dagster_home: Path) -> Path:
+    """Write DAGSTER_HOME/dagster.yaml unless one exists (a user's own settings are kept)."""
+    path = Path(dagster_home) / "dagster.yaml"
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(path, "# written by b2d (b2d_pipeline/instance.py); edit freely, it is not overwritten\n"
+                                + yaml.safe_dump(instance_config(), sort_keys=False))
+    return path
