@@ -24,14 +24,14 @@ def _peak_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _make_episodes(work: Path, policy: str, config: str, demos: int) -> list[str]:
+def _make_episodes(work: Path, policy: str, config: str, demos: int, demo_steps: int | None) -> list[str]:
     from episodes.stages import raw_to_episode
     from policies.config import load_policy_config
     from sim.registry import sensor_profile
     from teleop.demos import record_demonstrations
 
     profile = sensor_profile(load_policy_config(policy, config).observation.sensor_profile)
-    results = record_demonstrations(TASK, EMBODIMENT, demos, work / "raw")
+    results = record_demonstrations(TASK, EMBODIMENT, demos, work / "raw", max_steps=demo_steps)
     return [str(raw_to_episode(r.path, profile, work / "episodes")) for r in results if r.path]
 
 
@@ -49,6 +49,7 @@ def _evaluate(checkpoint: str | None, episodes: int, max_steps: int | None, quer
 
     from policies.closed_loop import run_episode
     from policies.rollouts import rollout_seed
+    from sim import physics
     from policies.scripted_baseline import ScriptedBaseline
     from sim.scene.builder import demonstration_scene
 
@@ -57,7 +58,7 @@ def _evaluate(checkpoint: str | None, episodes: int, max_steps: int | None, quer
         policy = LearnedPolicy(checkpoint)
     else:
         policy = ScriptedBaseline()
-    walls, timings, steps, queried = [], [], [], []
+    walls, timings, steps, queried, successes = [], [], [], [], 0
     for i in range(episodes):
         scene = demonstration_scene(TASK, EMBODIMENT, index=i)
         t0 = time.perf_counter()
@@ -66,15 +67,16 @@ def _evaluate(checkpoint: str | None, episodes: int, max_steps: int | None, quer
         timings.append(outcome.timing.as_dict())
         steps.append(outcome.timing.control_steps)
         queried.append(outcome.timing.queries)
+        successes += bool(outcome.record["success"])
     out = {"episodes": episodes, "seconds_per_episode": statistics.mean(walls),
            "episodes_per_hour_per_core": 3600.0 / statistics.mean(walls),
            "control_steps_per_episode": statistics.mean(steps), "queries_per_episode": statistics.mean(queried),
-           "successes": None}
+           "successes": successes}
     parts = {k: sum(t[k] for t in timings) for k in ("render", "policy", "physics", "evaluate")}
     total = sum(walls)
     out["share"] = {k: v / total for k, v in parts.items()} | {"other": 1.0 - sum(parts.values()) / total}
-    out["ms_per_policy_step"] = {k: 1e3 * v / max(1, sum(steps) // (3 if checkpoint else 1))
-                                 for k, v in parts.items()}
+    policy_steps = sum(steps) // (physics.CONTROL_HZ // policy.observation_spec.rate_hz)
+    out["ms_per_policy_step"] = {k: 1e3 * v / max(1, policy_steps) for k, v in parts.items()}
     if checkpoint and queries:
         out["inference_ms_per_query"] = _inference_ms(policy, queries, np)
     out["peak_rss_mb"] = _peak_mb()
@@ -111,12 +113,14 @@ def _in_child(fn, *args):
 
 
 def run_policy_bench(policy: str = "act", config: str = "tiny", demos: int = 2, train_steps: int = 50,
-                     eval_episodes: int = 2, max_steps: int | None = None, queries: int = 50) -> dict:
+                     eval_episodes: int = 2, max_steps: int | None = None, queries: int = 50,
+                     demo_steps: int | None = None) -> dict:
+    """`max_steps` caps the timed episodes (default: the full budget), `demo_steps` the demonstrations."""
     os.environ.setdefault("LP_NUM_THREADS", "0")     # GL on the calling thread: per-core figures
     with tempfile.TemporaryDirectory(prefix="b2d-bench-policy-") as tmp:
         work = Path(tmp)
         t0 = time.perf_counter()
-        episodes = _in_child(_make_episodes, work, policy, config, demos)
+        episodes = _in_child(_make_episodes, work, policy, config, demos, demo_steps)
         data_s = time.perf_counter() - t0
         training = _in_child(_train, policy, config, episodes, str(work / "ckpt"), train_steps)
         learned = _in_child(_evaluate, str(work / "ckpt"), eval_episodes, max_steps, queries)

@@ -107,7 +107,23 @@ def load_checkpoint(path: str | Path) -> Checkpoint:
         action = ActionSpec(tuple(manifest["action_names"]))
     except (KeyError, TypeError) as exc:
         raise SpecError(path / MANIFEST, "observation_spec / action_names", "the policy's specs") from exc
+    _check_stats(path / STATS, stats, spec, action)
     return Checkpoint(path, config, spec, action, stats, manifest, state_dict)
+
+
+def _check_stats(path: Path, stats: dict, spec: ObservationSpec, action: ActionSpec) -> None:
+    """The statistics must describe the specs' joints, actions and views, or normalisation would misalign."""
+    try:
+        sizes = {"state": len(stats["state"]["mean"]), "action": len(stats["action"]["mean"])}
+        views = set(stats["images"])
+    except (KeyError, TypeError) as exc:
+        raise SpecError(path, "state / action / images", "normalisation statistics of each") from exc
+    if sizes["state"] != len(spec.state_names):
+        raise SpecError(path, "state.mean", f"{len(spec.state_names)} values (the joints of policy.json)", sizes["state"])
+    if sizes["action"] != action.dim:
+        raise SpecError(path, "action.mean", f"{action.dim} values (the actuators of policy.json)", sizes["action"])
+    if not set(spec.views) <= views:
+        raise SpecError(path, "images", f"statistics of views {list(spec.views)}", sorted(views))
 
 
 def plot_loss(train_log: list[dict], out: Path, title: str = "") -> None:

@@ -78,6 +78,17 @@ def test_a_flipped_byte_in_the_weights_is_a_clear_error(act_checkpoint, tmp_path
         load_checkpoint(broken)
 
 
+def test_statistics_that_do_not_fit_the_specs_are_refused_naming_both(act_checkpoint, tmp_path):
+    import shutil
+    broken = tmp_path / "stats"
+    shutil.copytree(act_checkpoint, broken)
+    stats = json.loads((broken / STATS).read_text())
+    stats["action"]["mean"] = stats["action"]["mean"][:-2]
+    (broken / STATS).write_text(json.dumps(stats))
+    with pytest.raises(SpecError, match=r"action.mean.*actuators of policy.json"):
+        load_checkpoint(broken)
+
+
 def test_closed_loop_counts_steps_and_queries(act_checkpoint):
     policy = LearnedPolicy(act_checkpoint)
     rows = run_rollouts(policy, TASK, EMBODIMENT, "inv_equi", [], 2, max_steps=9)
@@ -153,3 +164,19 @@ def test_diffusion_policy_pops_queued_chunks_and_repeats_with_the_seed(policy_ep
     assert runs[0].recording.robot_qpos.tobytes() == runs[1].recording.robot_qpos.tobytes()
     other = run_episode(LearnedPolicy(out), demonstration_scene(TASK, EMBODIMENT), seed=8, max_steps=24)
     assert other.recording.action.tobytes() != runs[0].recording.action.tobytes()    # the seed draws the noise
+
+
+def test_the_tactile_variant_reads_every_tacmap_site_in_training_and_in_closed_loop(policy_episodes, tmp_path):
+    out = tmp_path / "act_tactile"
+    train_policy(load_policy_config("act", "tiny_tactile"), policy_episodes, out, steps=2)
+    policy = LearnedPolicy(out)
+    spec = policy.observation_spec
+    assert len(spec.tactile_sites) >= 4 and spec.tactile_shape == (30, 30) and spec.tactile_step == 8
+    outcome = run_episode(policy, demonstration_scene(TASK, EMBODIMENT), seed=1, max_steps=6)
+    assert outcome.record["termination"] == "horizon" and outcome.timing.queries == 2
+    vision_only = LearnedPolicy(out)
+    observation = {"images": {v: np.zeros((1, 48, 64, 3), np.uint8) for v in spec.views},
+                   "state": np.zeros((1, len(spec.state_names)))}
+    from policies.interface import PolicyError
+    with pytest.raises(PolicyError, match="lacks 'tactile'"):
+        vision_only.act(observation)
