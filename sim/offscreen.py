@@ -10,12 +10,38 @@ The segment colours are kept as `SegmentIds`: the per-pixel segment index (one b
 the scene has under 255 geoms) and the frame's table from index to geom id. Labels map the index
 through small per-frame tables (semantic and instance id per segment) in one lookup per image, so no
 full-size geom-id image has to be made.
+
+Where the time goes (llvmpipe on the calling thread; one 64x48 / 128x96 colour pass of a demonstration
+scene, 70 primitive geoms, ~6 / ~7 ms): not in the scene update (`mjv_updateScene`, ~3 us), context
+switches (~7 us) or read-backs and flips (<25 us); clearing, GL state and the skybox take ~0.4 / ~0.9 ms;
+the rest is the triangles of MuJoCo's tessellated primitives (a capsule is ~1,800 triangles at the
+default quality, the scene ~88k): vertex work for every geom drawn (~2.2 ms with all of them behind
+the camera), then set-up and rasterization of those in view, little of it per pixel. So each render
+draws only the geoms that can reach a pixel, which leaves every output byte as it was:
+- the colour and id passes skip geoms whose bounding sphere lies wholly outside the camera's view
+  frustum (they would be clipped away anyway);
+- a colour pass that follows the same camera's id pass draws only the geoms that own a pixel of it.
+  A pixel keeps the last fragment of greatest depth, and both passes rasterize the same triangles to
+  the same depths, so a geom that owns no pixel of the id pass owns none of the colour pass either
+  (skybox and haze test against the same depth buffer). Not used with transparency, reflective
+  geoms, planes seen from behind, wireframe, multisampling, shadows or reflections, where it would
+  not hold.
+Geom records are moved in the scene's own buffer (a numpy view checked against the bindings' field
+views when the renderer is made; without a match the renderer draws every geom) and put back after
+each render, keeping their segmentation ids, so segment colours do not change.
+
+A renderer must free its GL objects with its own context current: `close()` does, and so does a
+renderer that is garbage-collected without it (a finalizer), which otherwise deleted the objects of
+whichever context was current - another renderer's, whose images then came out as noise.
 """
 
 from __future__ import annotations
 
+import ctypes
 import importlib
+import math
 import os
+import weakref
 from dataclasses import dataclass
 
 import cv2
@@ -23,6 +49,20 @@ import mujoco
 import numpy as np
 
 _FLAGS = mujoco.mjtRndFlag
+_G = mujoco.mjtGeom
+_SPHERE, _CAPSULE, _ELLIPSOID, _CYLINDER, _BOX, _MESH, _PLANE = (   # plain ints: numpy compares enums slowly
+    int(_G.mjGEOM_SPHERE), int(_G.mjGEOM_CAPSULE), int(_G.mjGEOM_ELLIPSOID), int(_G.mjGEOM_CYLINDER),
+    int(_G.mjGEOM_BOX), int(_G.mjGEOM_MESH), int(_G.mjGEOM_PLANE))
+_OBJ_GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
+# mjvGeom as laid out in MuJoCo's mjvisualize.h (4.0), checked against the bindings per renderer
+_GEOM_DTYPE = np.dtype([
+    ("type", "i4"), ("dataid", "i4"), ("objtype", "i4"), ("objid", "i4"), ("category", "i4"), ("matid", "i4"),
+    ("texid", "i4"), ("texuniform", "i4"), ("texcoord", "i4"), ("segid", "i4"),
+    ("size", "f4", 3), ("pos", "f4", 3), ("mat", "f4", 9), ("rgba", "f4", 4),
+    ("emission", "f4"), ("specular", "f4"), ("shininess", "f4"), ("reflectance", "f4"), ("texrepeat", "f4", 2),
+    ("castshadow", "u1"), ("label", "u1", 100), ("camdist", "f4"), ("modelrbound", "f4"), ("transparent", "u1"),
+], align=True)
+_OPAQUE_ALPHA = np.float32(0.995)     # mjr_render treats a geom of lower alpha as transparent
 GL_BACKENDS = {"egl": "mujoco.egl", "osmesa": "mujoco.osmesa", "glfw": "mujoco.glfw"}
 
 
@@ -58,6 +98,66 @@ class SegmentIds:
         return self.map(self.geom)
 
 
+def _geom_records(scene: mujoco.MjvScene) -> np.ndarray | None:
+    """A structured numpy view of the scene's geom buffer (maxgeom records), or None when MuJoCo's
+    mjvGeom is not laid out as `_GEOM_DTYPE` says: the array fields' addresses and a probe record,
+    written through the bindings and read back, must agree."""
+    geoms = scene.geoms
+    if len(geoms) < 2:
+        return None
+    a, b = geoms[0], geoms[1]
+    try:
+        base = a.pos.ctypes.data - _GEOM_DTYPE.fields["pos"][1]
+        if b.pos.ctypes.data - a.pos.ctypes.data != _GEOM_DTYPE.itemsize:
+            return None
+        for name in ("size", "pos", "mat", "rgba", "texrepeat"):
+            if getattr(a, name).ctypes.data != base + _GEOM_DTYPE.fields[name][1]:
+                return None
+        view = np.frombuffer((ctypes.c_char * (_GEOM_DTYPE.itemsize * scene.maxgeom)).from_address(base),
+                             _GEOM_DTYPE)
+        probe = {"type": 3, "dataid": -5, "objtype": 5, "objid": 17, "category": 2, "matid": 9, "texid": 4,
+                 "texuniform": 1, "texcoord": 1, "segid": 23, "emission": 0.25, "specular": 0.5,
+                 "shininess": 0.75, "reflectance": 0.125, "castshadow": 1, "camdist": 1.5, "modelrbound": 2.5,
+                 "transparent": 1}
+        for name, value in probe.items():
+            setattr(a, name, value)
+        a.label = "probe"
+        record = view[0]
+        ok = all(float(record[name]) == value for name, value in probe.items()) \
+            and record["label"][:6].tobytes() == b"probe\0"
+        view[:2] = np.zeros(2, _GEOM_DTYPE)      # the scene is empty (ngeom 0): nothing else to restore
+    except (AttributeError, TypeError, ValueError):
+        return None
+    return view if ok else None
+
+
+def _bounding_radii(geoms: np.ndarray) -> np.ndarray:
+    """Radius about `pos` holding every drawn triangle, with a margin for float rounding: primitives
+    from their size, meshes from the model's rbound; inf for anything else (planes, height fields,
+    lines, flex, skins), which is always drawn."""
+    size = geoms["size"].astype(np.float64)
+    kind = geoms["type"]
+    radius = np.full(len(geoms), np.inf)
+    rims = size[:, :2].max(axis=1)
+    for gtype, r in ((_SPHERE, size.max(axis=1)),
+                     (_ELLIPSOID, size.max(axis=1)),
+                     (_CAPSULE, rims + size[:, 2]),         # open cylinder + end caps of radius <= rim
+                     (_CYLINDER, np.hypot(rims, size[:, 2])),
+                     (_BOX, np.linalg.norm(size, axis=1)),
+                     (_MESH, np.where(geoms["modelrbound"] > 0, geoms["modelrbound"], np.inf))):
+        sel = kind == gtype
+        radius[sel] = r[sel]
+    return radius * 1.001 + 1e-3
+
+
+def _release(gl, con) -> None:
+    """Free an MjrContext's GL objects with its own context current (restoring whichever was current:
+    a finalizer may run in the middle of another renderer's work), then the context."""
+    with gl.as_current():
+        con.free()
+    gl.free()
+
+
 class OffscreenRenderer:
     def __init__(self, model: mujoco.MjModel, width: int, height: int, max_geom: int = 10_000):
         if width > model.vis.global_.offwidth or height > model.vis.global_.offheight:
@@ -67,6 +167,8 @@ class OffscreenRenderer:
         self._gl = gl_context_class()(width, height)
         self._gl.make_current()
         self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
+        # frees the GL objects in this renderer's own context, from close() or when it is collected
+        self._finalizer = weakref.finalize(self, _release, self._gl, self._con)
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
         self._con.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
         self._rect = mujoco.MjrRect(0, 0, width, height)
@@ -75,6 +177,12 @@ class OffscreenRenderer:
         self._camera = mujoco.MjvCamera()
         self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
         self._scratch = np.empty((height, width), np.float64)
+        self._geoms = _geom_records(self.scene)        # None: draw every geom
+        self._records = None if self._geoms is None else self._geoms.view(np.uint8).reshape(max_geom, -1)
+        self._placement = 0                            # counts update() calls
+        self._set: tuple | None = None           # see _geom_set
+        self._view: tuple | None = None          # (placement, in view, always drawn, owners apply): see _drawn
+        self._owners: tuple[int, np.ndarray] | None = None   # (placement, segids owning a pixel of its id pass)
 
     def update(self, data: mujoco.MjData, camera_id: int, shadows: bool = False) -> None:
         """Place the scene's geoms for `data` as seen from a model camera."""
@@ -83,12 +191,14 @@ class OffscreenRenderer:
                                mujoco.mjtCatBit.mjCAT_ALL, self.scene)
         self.scene.flags[_FLAGS.mjRND_SHADOW] = shadows
         self.scene.flags[_FLAGS.mjRND_REFLECTION] = shadows
+        self._placement += 1
+        self._owners = None
 
     def color(self) -> np.ndarray:
         """HxWx3 uint8 image of the current scene."""
         self._gl.make_current()
         rgb = np.empty((self.height, self.width, 3), np.uint8)
-        mujoco.mjr_render(self._rect, self.scene, self._con)
+        self._render(colour_pass=True)
         mujoco.mjr_readPixels(rgb, None, self._rect, self._con)
         return np.flipud(rgb).copy()
 
@@ -100,20 +210,126 @@ class OffscreenRenderer:
 
     def id_pass(self, want_geoms: bool) -> tuple[np.ndarray, np.ndarray | None]:
         """The GL work of `depth_and_geoms`: render the segmentation pass and read back its depth
-        buffer and (if asked) segment colours, bottom row first; `decode` turns them into images."""
+        buffer and (if asked) segment colours, bottom row first; `decode` turns them into images.
+        Rendered before `color()` of the same placement, it also tells that colour pass which geoms
+        own a pixel."""
         self._gl.make_current()
         flags = self.scene.flags
         saved = flags.copy()
         flags[_FLAGS.mjRND_SEGMENT] = True
         flags[_FLAGS.mjRND_IDCOLOR] = True
-        colours = np.empty((self.height, self.width, 3), np.uint8) if want_geoms else None
+        track = self._geoms is not None
+        colours = np.empty((self.height, self.width, 3), np.uint8) if want_geoms or track else None
         depth = np.empty((self.height, self.width), np.float32)
         try:
-            mujoco.mjr_render(self._rect, self.scene, self._con)
+            self._render(colour_pass=False)
             mujoco.mjr_readPixels(colours, depth, self._rect, self._con)
         finally:
             np.copyto(flags, saved)
-        return depth, colours
+        if track:
+            self._owners = (self._placement, self._owning_segids(colours))
+        return depth, (colours if want_geoms else None)
+
+    def _render(self, colour_pass: bool) -> None:
+        """mjr_render of the geoms that can reach a pixel (all of them without a geom view); the scene
+        is left as it was."""
+        n = self.scene.ngeom
+        keep = None if self._geoms is None or n == 0 else self._drawn(self._geoms[:n], colour_pass)
+        if keep is None or keep.all():
+            mujoco.mjr_render(self._rect, self.scene, self._con)
+            return
+        records = self._records               # the same buffer as raw bytes: plain row copies
+        placed = records[:n].copy()
+        try:
+            kept = placed[keep]
+            records[:len(kept)] = kept
+            self.scene.ngeom = len(kept)
+            mujoco.mjr_render(self._rect, self.scene, self._con)
+        finally:
+            records[:n] = placed    # also undoes what mjr_render writes into geoms (camdist, flags)
+            self.scene.ngeom = n
+
+    def _drawn(self, geoms: np.ndarray, colour_pass: bool) -> np.ndarray | None:
+        """Which placed geoms to draw (None: all). The view test is made once per placement."""
+        if self._view is None or self._view[0] != self._placement:
+            self._view = (self._placement, *self._frustum(geoms))
+        _, keep, always, owners_apply = self._view
+        if keep is None or not colour_pass or not owners_apply or self._owners is None \
+                or self._owners[0] != self._placement:
+            return keep
+        segid, owners = geoms["segid"], self._owners[1]
+        if segid.max() >= len(owners):
+            return keep      # a segment id the id pass cannot have told apart: no pixel owners
+        owns = segid < 0     # not drawn in the id pass: always drawn
+        owns[~owns] = owners[segid[~owns]]
+        return keep & (owns | always)
+
+    def _frustum(self, geoms: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None, bool]:
+        """(placed geoms whose bounding sphere reaches the camera's view frustum, geoms that are always
+        drawn, whether a colour pass may draw only the id pass's pixel owners) - (None, None, False):
+        draw all."""
+        scene, flags = self.scene, self.scene.flags
+        if scene.stereo or scene.enabletransform or flags[_FLAGS.mjRND_SHADOW] or flags[_FLAGS.mjRND_REFLECTION]:
+            return None, None, False     # shadows and reflections show geoms from outside the view
+        cam0, cam1 = scene.camera[0], scene.camera[1]
+        if cam0.orthographic:
+            return None, None, False
+        radius, always, opaque, planes = self._geom_set(geoms)
+        apex = 0.5 * (np.asarray(cam0.pos, np.float64) + np.asarray(cam1.pos, np.float64))
+        (fx, fy, fz), (ux, uy, uz) = cam0.forward.tolist(), cam0.up.tolist()    # plain floats: small
+        right = (fy * uz - fz * uy, fz * ux - fx * uz, fx * uy - fy * ux)     # numpy calls cost more here
+        near, top, bottom = float(cam0.frustum_near), float(cam0.frustum_top), float(cam0.frustum_bottom)
+        half = float(cam0.frustum_width) or 0.5 * self.width / self.height * (top - bottom)   # as mjr_render
+        left, right_edge = float(cam0.frustum_center) - half, float(cam0.frustum_center) + half
+        # inward unit normals in the camera frame (x right, y up, z forward): the near plane, then the
+        # side planes through the apex; as world directions, one matrix product tests every geom
+        planes_cam = [(0.0, 0.0, 1.0), (near, 0.0, -left), (-near, 0.0, right_edge), (0.0, near, -bottom),
+                      (0.0, -near, top)]
+        rx, ry, rz = right
+        normals = []
+        for a, b, c in planes_cam:
+            h = math.hypot(a, b, c)
+            normals.append(((a * rx + b * ux + c * fx) / h, (a * ry + b * uy + c * fy) / h,
+                            (a * rz + b * uz + c * fz) / h))
+        distance = (geoms["pos"] - apex) @ np.array(normals).T
+        distance[:, 0] -= near
+        # (a pose gone NaN is drawn, as it was before culling)
+        keep = ~(distance <= -radius[:, None]).any(axis=1) | always
+        # a plane seen from (almost) behind is drawn as transparent by mjr_render
+        behind = False
+        for i in planes:
+            mat, pos = geoms["mat"][i].tolist(), geoms["pos"][i].tolist()
+            behind |= sum((apex[k] - pos[k]) * mat[2 + 3 * k] for k in range(3)) < 1e-6
+        owners_apply = opaque and not behind and not self._con.offSamples and not flags[_FLAGS.mjRND_WIREFRAME]
+        return keep, always, owners_apply
+
+    def _geom_set(self, geoms: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool, np.ndarray]:
+        """What does not change with the pose, kept while the placed geoms' types, sizes, labels,
+        alphas and reflectances stay the same: bounding radii, the geoms always drawn (unbounded
+        types, text labels), whether all are opaque (no transparency, no reflective geom: the colour
+        pass's pixel owners are then the id pass's) and the rows of planes."""
+        label = geoms["label"][:, 0]
+        key = b"".join(geoms[f].tobytes() for f in ("type", "size", "modelrbound", "rgba", "reflectance")) \
+            + label.tobytes()
+        if self._set is None or self._set[0] != key:
+            kind = geoms["type"]
+            radius = _bounding_radii(geoms)
+            always = ~np.isfinite(radius) | (label != 0)
+            flat = (kind == _PLANE) | (kind == _BOX)
+            opaque = not ((geoms["rgba"][:, 3] < _OPAQUE_ALPHA).any() or ((geoms["reflectance"] > 0) & flat).any())
+            self._set = (key, radius, always, opaque, np.flatnonzero(kind == _PLANE))
+        return self._set[1:]
+
+    def _owning_segids(self, colours: np.ndarray) -> np.ndarray:
+        """[segid] -> owns a pixel of this id pass, from its colours (segid + 1 packed, 0 = none)."""
+        n = self.scene.ngeom
+        if n < 255:
+            counts = cv2.calcHist([colours], [0], None, [256], [0, 256]).ravel()    # channel 0
+        else:
+            index = (colours[..., 0].astype(np.int64) | colours[..., 1].astype(np.int64) << 8
+                     | colours[..., 2].astype(np.int64) << 16)
+            counts = np.bincount(index.ravel(), minlength=n + 1)
+        return counts[1:] > 0
 
     def decode(self, depth: np.ndarray, colours: np.ndarray | None) -> tuple[np.ndarray, SegmentIds | None]:
         """Metric depth and segments of an `id_pass` (before the scene is updated again). GL rows run
@@ -144,14 +360,18 @@ class OffscreenRenderer:
                 index |= colours[..., channel].astype(np.int64) << (8 * channel)
             np.minimum(index, ngeom, out=index)
         lookup = np.full(ngeom + 1, -1, np.int32)
-        for g in self.scene.geoms[:ngeom]:
-            if g.segid >= 0 and g.objtype == mujoco.mjtObj.mjOBJ_GEOM:
-                lookup[g.segid + 1] = g.objid
+        if self._geoms is not None:
+            placed = self._geoms[:ngeom]
+            mine = (placed["segid"] >= 0) & (placed["objtype"] == _OBJ_GEOM)
+            lookup[placed["segid"][mine] + 1] = placed["objid"][mine]
+        else:
+            for g in self.scene.geoms[:ngeom]:
+                if g.segid >= 0 and g.objtype == mujoco.mjtObj.mjOBJ_GEOM:
+                    lookup[g.segid + 1] = g.objid
         return SegmentIds(index, lookup)
 
     def close(self) -> None:
         if self._con is not None:
-            self._gl.make_current()
-            self._con.free()
-            self._gl.free()
+            self._finalizer()
             self._con = None
+            self._geoms = None

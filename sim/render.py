@@ -4,7 +4,7 @@ Rendering works from positions alone (`mj_kinematics` + `mj_camlight`), so a cha
 profile re-renders stored replay states without re-simulating. One renderer serves all cameras;
 shadows and reflections, and multisample anti-aliasing, stay off unless the profile asks (`shadows`,
 `antialias`: they cost ~5x and ~2.8x per RGB frame). Depth and geom ids come from one shared pass
-(`sim.offscreen`).
+(`sim.offscreen`), rendered before the RGB pass, which then draws only the geoms that own a pixel.
 """
 
 from __future__ import annotations
@@ -79,11 +79,8 @@ class CameraRig:
             out = {}
             t1 = clock()
             self.seconds["scene_update"] += t1 - t0
-            if self.want_rgb:
-                out["rgb"] = self.renderer.color()
-                t0, t1 = t1, clock()
-                self.seconds["rgb"] += t1 - t0
             if self.want_depth or self.want_segments:
+                # the id pass first: the colour pass then draws only the geoms that own a pixel of it
                 buffers = self.renderer.id_pass(self.want_segments)
                 t0, t1 = t1, clock()
                 self.seconds["depth_and_ids"] += t1 - t0
@@ -94,6 +91,10 @@ class CameraRig:
                     out["segments"] = segments
                 t0, t1 = t1, clock()
                 self.seconds["decode"] += t1 - t0
+            if self.want_rgb:
+                out = {"rgb": self.renderer.color(), **out}
+                t0, t1 = t1, clock()
+                self.seconds["rgb"] += t1 - t0
             frames[name] = out
         return frames
 
