@@ -51,6 +51,7 @@ class EpisodeLayout:
     rate_hz: int
     tactile_step: int
     profile_hash: str
+    tessellation: tuple[int, int] | None = None
 
 
 def read_episode(path: Path, cfg: PolicyConfig) -> tuple[EpisodeArrays, EpisodeLayout]:
@@ -75,7 +76,8 @@ def read_episode(path: Path, cfg: PolicyConfig) -> tuple[EpisodeArrays, EpisodeL
             state_names=tuple(r.static("robot/joint_names")), action_names=tuple(r.static("action/names")),
             tactile_sites=sites, width=int(cams.get("width", 0)), height=int(cams.get("height", 0)),
             rate_hz=int(profile.get("rate_hz", 0)), tactile_step=int(profile.get("tactile", {}).get("step", 1)),
-            profile_hash=str(collection.get("profile_hash", "")))
+            profile_hash=str(collection.get("profile_hash", "")),
+            tessellation=tuple(cams["tessellation"]) if cams.get("tessellation") else None)
         arrays = EpisodeArrays(Path(path).stem, images, r.read("robot/qpos").astype(np.float32),
                                r.read("action/action").astype(np.float32), tactile)
     if not (np.isfinite(arrays.state).all() and np.isfinite(arrays.actions).all()):

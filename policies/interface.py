@@ -34,14 +34,15 @@ class ObservationSpec:
     tactile_shape: tuple[int, int] = (0, 0)
     tactile_step: int = 1                    # TacMap subsampling of the profile the policy was trained on
     privileged: bool = False                 # reads the simulator state (the scripted baseline only)
+    tessellation: tuple[int, int] | None = None   # primitive (slices, stacks) of its views' renders
 
     def to_dict(self) -> dict:
         return asdict(self)
 
     @classmethod
     def from_dict(cls, raw: dict) -> "ObservationSpec":
-        tuples = {"views", "state_names", "tactile_sites", "tactile_shape"}
-        return cls(**{k: tuple(v) if k in tuples else v for k, v in raw.items()})
+        tuples = {"views", "state_names", "tactile_sites", "tactile_shape", "tessellation"}
+        return cls(**{k: tuple(v) if k in tuples and v is not None else v for k, v in raw.items()})
 
 
 @dataclass(frozen=True)

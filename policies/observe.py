@@ -20,7 +20,8 @@ from sim.registry import SensorProfile, parse_sensor_profile
 def policy_profile(spec: ObservationSpec) -> SensorProfile:
     """A sensor profile that renders exactly the policy's inputs (RGB of its views, its TacMap grid)."""
     raw = {"name": "policy_inputs", "rate_hz": spec.rate_hz,
-           "cameras": {"ids": list(spec.views), "width": spec.width, "height": spec.height, "modalities": ["rgb"]},
+           "cameras": {"ids": list(spec.views), "width": spec.width, "height": spec.height, "modalities": ["rgb"],
+                       **({"tessellation": list(spec.tessellation)} if spec.tessellation else {})},
            "tactile": {"enabled": bool(spec.tactile_sites), "resolution": 240, "step": spec.tactile_step,
                        "max_range_mm": 15.0}}
     return parse_sensor_profile(raw)

@@ -157,7 +157,7 @@ def train_policy(cfg: PolicyConfig, episode_paths: list[Path], out_dir: Path, pr
                            n_obs_steps=cfg.observation.n_obs_steps, state_names=layout.state_names,
                            tactile_sites=layout.tactile_sites,
                            tactile_shape=(shapes.tactile_height, shapes.tactile_width),
-                           tactile_step=layout.tactile_step)
+                           tactile_step=layout.tactile_step, tessellation=layout.tessellation)
     manifest = {"setting": {"task": layout.task, "embodiment": layout.embodiment},
                 # each episode's scene sample too: evaluation anchors on the training scenes without the files
                 "training_set": [{"episode": p.name, "sha256": file_sha256(p), "scene": _scene_json(p)} for p in paths],

@@ -36,6 +36,15 @@ def apply_antialias(model: mujoco.MjModel, profile: SensorProfile) -> None:
     model.vis.quality.offsamples = 4 if profile.antialias else 0
 
 
+MUJOCO_TESSELLATION = (28, 16)     # MuJoCo's default (slices, stacks); no b2d model sets its own
+
+
+def apply_tessellation(model: mujoco.MjModel, profile: SensorProfile) -> None:
+    """The profile's primitive tessellation, read when the renderer's GL context is made (set either way:
+    an earlier rig on the same model must not leave its own)."""
+    model.vis.quality.numslices, model.vis.quality.numstacks = profile.tessellation or MUJOCO_TESSELLATION
+
+
 class CameraRig:
     """`capture(data)` renders every camera of the profile. With `segments=True` each shot also
     holds "segments" (`sim.offscreen.SegmentIds`: geom per pixel): the segmentation that labels are
@@ -48,6 +57,7 @@ class CameraRig:
         model.vis.map.znear = profile.clip_near_m / max(model.stat.extent, 1e-6)
         model.vis.map.zfar = profile.clip_far_m / max(model.stat.extent, 1e-6)
         apply_antialias(model, profile)
+        apply_tessellation(model, profile)
         self.renderer = OffscreenRenderer(model, profile.width, profile.height)
         self.want_rgb = "rgb" in profile.modalities
         self.want_depth = "depth" in profile.modalities

@@ -35,3 +35,16 @@ def test_channels_and_paper_settings():
     assert registry.parse_setting_key("citrus_plate_loading__ur5_rh5dg2").available
     with pytest.raises(UnknownNameError):
         registry.parse_setting_key("citrus_plate_loading__nope")
+
+
+def test_a_profile_tessellation_is_two_small_integers_named_on_error():
+    import pytest
+
+    from sim.errors import SpecError
+    from sim.registry import parse_sensor_profile, sensor_profile
+
+    assert sensor_profile("policy_tiny").tessellation == (8, 4) and sensor_profile("preview").tessellation is None
+    base = {"name": "t", "rate_hz": 20, "cameras": {"ids": ["chest"], "width": 8, "height": 6}}
+    for bad in ([8], [8, 2], [8.0, 4], "8x4", [True, 4]):
+        with pytest.raises(SpecError, match="cameras.tessellation"):
+            parse_sensor_profile({**base, "cameras": {**base["cameras"], "tessellation": bad}})

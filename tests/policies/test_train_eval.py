@@ -180,3 +180,34 @@ def test_the_tactile_variant_reads_every_tacmap_site_in_training_and_in_closed_l
     from policies.interface import PolicyError
     with pytest.raises(PolicyError, match="lacks 'tactile'"):
         vision_only.act(observation)
+
+
+def test_the_closed_loop_renders_exactly_the_training_images(policy_episodes, act_checkpoint):
+    """Online views (posed from the state, as the runner does after each step) equal the episode's frames,
+    rendered offline from the replay under the same profile (coarse tessellation included)."""
+    import h5py
+    import mujoco
+
+    from episodes.reader import EpisodeReader
+    from policies.observe import ObservationSource
+
+    spec = LearnedPolicy(act_checkpoint).observation_spec
+    assert spec.tessellation == (8, 4)
+    episode = policy_episodes[0]
+    with h5py.File(episode.parent / ".work" / "episode_0000.replay.h5") as f:
+        qpos = f["qpos"][()]
+    with EpisodeReader(episode) as r:
+        steps = r.read("time/sim_step") - 1
+        stored = {v: r.read(f"cameras/{v}/rgb") for v in spec.views}
+    scene = demonstration_scene(TASK, EMBODIMENT, 0)
+    data = mujoco.MjData(scene.model)
+    source = ObservationSource(scene, spec)
+    try:
+        for k in (0, len(steps) - 1):
+            data.qpos[:] = qpos[steps[k]]
+            source.capture(data)
+            frame = source.observation(scene.task.instruction, k)
+            for v in spec.views:
+                assert frame["images"][v][-1].tobytes() == stored[v][k].tobytes(), (v, k)
+    finally:
+        source.close()
