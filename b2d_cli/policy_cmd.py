@@ -109,6 +109,7 @@ def eval_cmd(checkpoint_dir, channels, episodes, max_steps, out_file, as_json) -
     if out_file:
         write_records(frame, out_file)
     cells = cell_metrics(frame, by=("task", "embodiment", "policy", "channel"))
+    cells = cells.sort_values("channel", key=lambda c: c.map({n: i for i, n in enumerate(registry.channel_names())}))
     cols = [c for c in ("channel", "N", "n_success", "SR", "LSCR", "CSCR", "n_error") if c in cells.columns]
     if as_json:
         click.echo(json.dumps(json.loads(cells[cols].to_json(orient="records")), indent=2))
