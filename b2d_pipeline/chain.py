@@ -9,6 +9,7 @@ the terminal; the terminal shows one progress line per run: done/total, job and 
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import time
 
@@ -66,6 +67,15 @@ def _environment(values: dict[str, str]):
                 os.environ[k] = v
 
 
+def _eta(durations: dict[str, list[float]], remaining: list[str]) -> str:
+    """Remaining runs at the mean time of earlier runs of the same job (of any job, for a job not run yet)."""
+    if not durations:
+        return "ETA -"
+    overall = [d for ds in durations.values() for d in ds]
+    mean = {job: sum(ds) / len(ds) for job, ds in durations.items()}
+    return "ETA " + _clock(sum(mean.get(job, sum(overall) / len(overall)) for job in remaining))
+
+
 def _clock(seconds: float) -> str:
     return f"{int(seconds) // 60}:{int(seconds) % 60:02d}"
 
@@ -81,19 +91,22 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                 if processes > 1 else {"in_process": {}})
     run_config = {**QUIET_LOGS, "execution": {"config": executor}}
     plan = run_plan(settings, setting_keys, channels)
-    results, failed_settings, started = [], set(), time.perf_counter()
+    results, failed_settings, started, durations = [], set(), time.perf_counter(), {}
+    logging.getLogger("dagster").setLevel(logging.ERROR)   # the executor's step-worker lines too
     with _environment(settings.to_env()):
         for done, (setting, job, partition) in enumerate(plan):
             if setting in failed_settings:
                 continue                              # its production failed: nothing to evaluate
             elapsed = time.perf_counter() - started
-            eta = f"ETA {_clock(elapsed / done * (len(plan) - done))}" if done else "ETA -"
+            eta = _eta(durations, [j for _, j, _ in plan[done:]])
             where = f" [{partition}]" if partition else ""
             log(f"[{done + 1}/{len(plan)}] {job}{where}  elapsed {_clock(elapsed)}  {eta}")
             tags = (setting_channel_partitions.get_tags_for_partition_key(partition)
                     if isinstance(partition, dg.MultiPartitionKey) else {"dagster/partition": partition} if partition
                     else {})
+            t0 = time.perf_counter()
             result = dg.execute_job(dg.reconstructable(JOBS[job]), instance, run_config=run_config, tags=tags)
+            durations.setdefault(job, []).append(time.perf_counter() - t0)
             results.append(result)
             if not result.success:
                 for event in result.all_events:

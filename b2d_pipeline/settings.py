@@ -35,7 +35,7 @@ class FactorySettings:
             data_root=Path(os.environ.get("B2D_DATA_ROOT", REPO_ROOT / "data")),
             profile=sensor_profile(os.environ.get("B2D_PROFILE", "preview")),
             demo_episodes=int(os.environ.get("B2D_DEMO_EPISODES", "2")),
-            eval_episodes=int(os.environ.get("B2D_EVAL_EPISODES", "2")),
+            eval_episodes=int(os.environ.get("B2D_EVAL_EPISODES", "1")),
             max_steps=int(max_steps) if max_steps else None,
             render_workers=int(os.environ.get("B2D_RENDER_WORKERS", "1")),
             policies=tuple(p for p in os.environ.get("B2D_POLICIES", "act,dp").split(",") if p),
