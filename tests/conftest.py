@@ -4,18 +4,14 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 import pytest  # noqa: E402
 
-SETTING = "citrus_plate_loading__ur5_rh5dg2"
-TASK, EMBODIMENT = SETTING.split("__")
+from foundation_demos import EMBODIMENT, SETTING, TASK, record_foundation_demos  # noqa: E402,F401
 
 
 @pytest.fixture(scope="session")
 def raw_dir(tmp_path_factory):
     """Two short real recordings of the foundation setting (a few control steps each)."""
-    from teleop.demos import record_demonstrations
-
     out = tmp_path_factory.mktemp("raw")
-    results = record_demonstrations(TASK, EMBODIMENT, 2, out, max_steps=18)
-    assert all(r.error is None for r in results), [r.error for r in results]
+    record_foundation_demos(out, 2, max_steps=18)
     return out
 
 
