@@ -21,13 +21,14 @@ def _episode_files(paths: tuple[Path, ...]) -> list[Path]:
 def _default_episodes(setting: str, profile) -> list[Path]:
     """The store's episodes of the setting under the policy's profile, rendered from the stored replays
     when missing (data/replays/<setting>: `b2d materialize` or the Dagster job writes them)."""
+    from b2d_pipeline.resources import EpisodeStore
     from b2d_pipeline.settings import FactorySettings
     from policies.training_data import render_policy_episodes
 
-    root = FactorySettings.from_env().data_root
-    out = root / "episodes" / profile.content_hash / setting
+    store = EpisodeStore(data_root=str(FactorySettings.from_env().data_root))
+    out = store.episode_dir(profile.content_hash, setting)
     have = sorted(out.glob("episode_*.hdf5"))
-    replays = sorted((root / "replays" / setting).glob("*.replay.h5"))
+    replays = sorted(store.replay_dir(setting).glob("*.replay.h5"))
     missing = [r for r in replays if not (out / r.name.replace(".replay.h5", ".hdf5")).exists()]
     if missing:
         with click.progressbar(length=len(missing), label=f"rendering {len(missing)} replays under "

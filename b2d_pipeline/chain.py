@@ -9,7 +9,6 @@ the terminal; the terminal shows one progress line per run: done/total, job and 
 from __future__ import annotations
 
 import contextlib
-import logging
 import os
 import time
 
@@ -92,7 +91,6 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
     run_config = {**QUIET_LOGS, "execution": {"config": executor}}
     plan = run_plan(settings, setting_keys, channels)
     results, failed_settings, started, durations = [], set(), time.perf_counter(), {}
-    logging.getLogger("dagster").setLevel(logging.ERROR)   # the executor's step-worker lines too
     with _environment(settings.to_env()):
         for done, (setting, job, partition) in enumerate(plan):
             if setting in failed_settings:

@@ -17,6 +17,7 @@ import numpy as np
 from policies.checkpoint import Checkpoint, load_checkpoint
 from policies.interface import ActionSpec, ObservationSpec, PolicyError
 from policies.normalize import Normalizer
+from policies.train import build_model, to_model_batch
 
 
 class TemporalEnsembler:
@@ -50,7 +51,6 @@ class LearnedPolicy:
         torch.set_num_threads(threads)
 
         from policies.models.shapes import ModelShapes
-        from policies.train import build_model
 
         ckpt = checkpoint if isinstance(checkpoint, Checkpoint) else load_checkpoint(checkpoint)
         self.checkpoint = ckpt
@@ -80,8 +80,6 @@ class LearnedPolicy:
             self.ensembler.reset()
 
     def _batch(self, observation: dict) -> dict:
-        from policies.train import to_model_batch
-
         spec = self.observation_spec
         try:
             raw = {"images": np.stack([observation["images"][v] for v in spec.views], axis=1)[None],

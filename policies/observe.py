@@ -34,11 +34,12 @@ class ObservationSource:
         from sim.render import CameraRig
 
         self.scene, self.spec = scene, spec
-        self.rig = CameraRig(scene.model, policy_profile(spec)) if spec.views else None
+        profile = policy_profile(spec)
+        self.rig = CameraRig(scene.model, profile) if spec.views else None
         self.tactile = None
         if spec.tactile_sites:
             from tactile.rig import TactileRig
-            self.tactile = TactileRig.for_profile(scene, policy_profile(spec))
+            self.tactile = TactileRig.for_profile(scene, profile)
             missing = set(spec.tactile_sites) - set(self.tactile.site_names)
             if missing:
                 raise ValueError(f"tactile sites {sorted(missing)} not on this embodiment "
