@@ -5,11 +5,12 @@ from __future__ import annotations
 import dagster as dg
 
 from sim.registry import channel_names, paper_settings
+from sim.tasks import is_recordable
 
 
 def setting_keys() -> list[str]:
     """The paper's available settings that the scripted operator can demonstrate (a demo_plan)."""
-    return [s.key for s in paper_settings() if s.recordable]
+    return [s.key for s in paper_settings() if is_recordable(s)]
 
 
 settings_partitions = dg.StaticPartitionsDefinition(setting_keys())

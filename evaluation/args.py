@@ -8,16 +8,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from evaluation.condition import Condition, ConditionCompiler
 from evaluation.errors import TaskSpecError, one_of
 from evaluation.state import TABLE
 from evaluation.step import Target
-
-if TYPE_CHECKING:
-    from evaluation.grammar import CompileScope, Condition
 
 REQUIRED = object()
 CONTACT_NAMES = ("table", "left_hand", "right_hand", "any_hand")
@@ -26,7 +24,7 @@ CONTACT_NAMES = ("table", "left_hand", "right_hand", "any_hand")
 class ArgReader:
     """Typed access to a predicate's argument mapping; ``done()`` rejects unknown arguments."""
 
-    def __init__(self, predicate: str, raw: Any, scope: CompileScope, path: str):
+    def __init__(self, predicate: str, raw: Any, scope: ConditionCompiler, path: str):
         self.predicate, self.scope, self.path = predicate, scope, path
         if raw is None:
             raw = {}

@@ -15,36 +15,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from evaluation.args import ArgReader
+from evaluation.condition import Condition
 from evaluation.errors import TaskSpecError, one_of
 from evaluation.state import TaskContext
-from evaluation.step import EvalStep
 
 COMBINATORS = ("all", "any", "not", "stage", "latched")
-
-
-class Condition:
-    """A compiled condition: call it once per update."""
-
-    name = "condition"
-    stateful = False
-
-    def __call__(self, step: EvalStep) -> bool:
-        raise NotImplementedError
-
-    def children(self) -> Sequence[Condition]:
-        return ()
-
-    def reset(self) -> None:
-        """Forget per-episode memory (stateful predicates override and call super)."""
-        for child in self.children():
-            child.reset()
-
-    def restart(self) -> None:
-        """Forget what has been counted but keep what is being observed (a key held down, a visit
-        under way), so that only events beginning from the next update count: a stage's events count
-        from when its dependencies hold (evaluation/stages.py). Stateful predicates override."""
-        for child in self.children():
-            child.restart()
 
 
 PREDICATES: dict[str, Callable[[ArgReader], Condition]] = {}

@@ -12,38 +12,41 @@ from pathlib import Path
 from typing import Literal
 
 import pydantic
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
 from sim.errors import SpecError, UnknownNameError
 from sim.registry import load_yaml
+from sim.schema import CatalogModel, validate
+from sim.schema.base import Bool, Int, Name, Number, Str
+from sim.schema.messages import schema_error
 
 CONFIG_ROOT = Path(__file__).parent / "configs"
 LEARNED_POLICIES = ("act", "dp")
 
 
-class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+class _Strict(CatalogModel):
+    """The catalog files' base (sim/schema/base.py): unknown keys refused, read-only."""
 
 
 class ObservationConfig(_Strict):
     """What the policy sees. Views, resolution and rate come from `sensor_profile`, the profile its
     training episodes are rendered under; the closed-loop runner renders the same views online."""
 
-    sensor_profile: str
-    views: tuple[str, ...] = Field(min_length=1)
-    tactile: bool = False          # TacMap sites as extra inputs (the tactile-conditioned variant)
-    n_obs_steps: int = Field(1, ge=1, le=16)
+    sensor_profile: Str
+    views: tuple[Name, ...] = Field(min_length=1)
+    tactile: Bool = False          # TacMap sites as extra inputs (the tactile-conditioned variant)
+    n_obs_steps: Int = Field(1, ge=1, le=16)
 
 
 class ActionConfig(_Strict):
     """Action chunks: `horizon` rows starting at frame offset `start` from the newest observation (1: the
     next frame's action); the runner executes `execute` rows of each chunk from row `first_executed`."""
 
-    horizon: int = Field(ge=1, le=256)
-    start: int = Field(1, ge=-16, le=16)
-    first_executed: int = Field(0, ge=0)
-    execute: int = Field(1, ge=1)
-    temporal_ensemble_coeff: float | None = Field(None, ge=0.0)   # ACT: weights exp(-m i), oldest first
+    horizon: Int = Field(ge=1, le=256)
+    start: Int = Field(1, ge=-16, le=16)
+    first_executed: Int = Field(0, ge=0)
+    execute: Int = Field(1, ge=1)
+    temporal_ensemble_coeff: Number | None = Field(None, ge=0.0)   # ACT: weights exp(-m i), oldest first
 
     @model_validator(mode="after")
     def _fits(self):
@@ -56,24 +59,24 @@ class ActionConfig(_Strict):
 
 
 class TrainConfig(_Strict):
-    steps: int = Field(ge=1)
-    batch_size: int = Field(ge=1)
-    lr: float = Field(gt=0)
-    weight_decay: float = Field(0.0, ge=0)
+    steps: Int = Field(ge=1)
+    batch_size: Int = Field(ge=1)
+    lr: Number = Field(gt=0)
+    weight_decay: Number = Field(0.0, ge=0)
     lr_schedule: Literal["constant", "cosine"] = "constant"
-    warmup_steps: int = Field(0, ge=0)
-    grad_clip: float | None = Field(None, gt=0)
-    ema_decay: float | None = Field(None, gt=0, lt=1)
-    seed: int = Field(0, ge=0)
-    threads: int = Field(1, ge=1, le=256)     # torch CPU threads: part of the config, so results are reproducible
+    warmup_steps: Int = Field(0, ge=0)
+    grad_clip: Number | None = Field(None, gt=0)
+    ema_decay: Number | None = Field(None, gt=0, lt=1)
+    seed: Int = Field(0, ge=0)
+    threads: Int = Field(1, ge=1, le=256)     # torch CPU threads: part of the config, so results are reproducible
     device: Literal["cpu", "cuda", "auto"] = "cpu"
-    log_every: int = Field(10, ge=1)
+    log_every: Int = Field(10, ge=1)
 
 
 class PolicyConfig(_Strict):
     policy: Literal["act", "dp"]
-    name: str
-    description: str = ""
+    name: Str
+    description: Str = ""
     observation: ObservationConfig
     action: ActionConfig
     model: dict = Field(default_factory=dict)     # checked by the policy's own model config (policies/models)
@@ -114,21 +117,13 @@ def load_policy_config(policy: str, name_or_path: str) -> PolicyConfig:
 
 
 def parse_policy_config(raw: dict, path=None, policy: str | None = None) -> PolicyConfig:
-    try:
-        cfg = PolicyConfig(**raw)
+    cfg = validate(PolicyConfig, raw, path)
+    from policies.models import model_class
+    model_config_class = model_class(cfg.policy).config_class
+    try:   # strict here: the file's "12" or `true` where a number belongs is a mistake, not a value
+        model_config_class.model_validate(cfg.model, strict=True)
     except pydantic.ValidationError as exc:
-        raise _spec_error(exc, path, "") from exc
-    try:
-        cfg.model_config_object()
-    except pydantic.ValidationError as exc:
-        raise _spec_error(exc, path, "model.") from exc
+        raise schema_error(exc, path, model_config_class, prefix="model") from exc
     if policy and cfg.policy != policy:
         raise SpecError(path, "policy", f"'{policy}' (the folder it was asked from)", cfg.policy)
     return cfg
-
-
-def _spec_error(exc: pydantic.ValidationError, path, prefix: str) -> SpecError:
-    err = exc.errors()[0]
-    field = prefix + ".".join(str(p) for p in err["loc"]) if err["loc"] else prefix.rstrip(".") or "<document>"
-    got = None if err["type"] == "missing" else err.get("input")
-    return SpecError(path, field, err["msg"], got)

@@ -12,9 +12,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
-import yaml
-
-from sim.errors import SpecError, UnknownNameError
+from sim.errors import SpecError, UnknownNameError  # noqa: F401  (SpecError: imported from here by callers)
+from sim.schema import read_yaml, validate
+from sim.schema.channel import ChannelFile
+from sim.schema.sensor_profile import (DEFAULT_OCCUPANCY_BOUNDS_M, DEFAULT_OCCUPANCY_VOXEL_M,  # noqa: F401
+                                       SensorProfileFile)
+from sim.schema.settings import SettingsFile
 
 CATALOG = Path(__file__).parent / "catalog"
 SETTING_SEPARATOR = "__"
@@ -22,14 +25,7 @@ SETTING_SEPARATOR = "__"
 
 def load_yaml(path: Path) -> dict:
     """Load one YAML mapping safely; errors name the file."""
-    try:
-        with open(path, encoding="utf-8") as f:
-            data = yaml.safe_load(f)
-    except yaml.YAMLError as exc:
-        raise SpecError(path, "<document>", f"valid YAML ({exc})") from exc
-    if not isinstance(data, dict):
-        raise SpecError(path, "<document>", "a YAML mapping at the top level", type(data).__name__)
-    return data
+    return read_yaml(path)
 
 
 def _files(kind: str) -> dict[str, Path]:
@@ -97,9 +93,7 @@ class SensorProfile:
 CAMERA_MODALITIES = ("rgb", "depth")
 # labels derived from the same render pass (sim/labels); segmentation is a b2d addition to the paper's list
 LABEL_MODALITIES = ("segmentation", "box2d", "box3d", "occupancy")
-# the table workspace: 1.2 x 0.8 m tables, tops at 0.70 - 0.80 m, objects up to ~0.45 m tall
-DEFAULT_OCCUPANCY_BOUNDS_M = ((-0.6, -0.4, 0.65), (0.6, 0.4, 1.25))
-DEFAULT_OCCUPANCY_VOXEL_M = 0.02
+# the occupancy defaults (the table workspace at 2 cm) live with the schema: sim.schema.sensor_profile
 
 
 def sensor_profile(name: str) -> SensorProfile:
@@ -109,79 +103,30 @@ def sensor_profile(name: str) -> SensorProfile:
 
 
 def parse_sensor_profile(raw: dict, path=None) -> SensorProfile:
-    def need(mapping, key, kind, field):
-        if key not in mapping:
-            raise SpecError(path, field, f"a {kind}")
-        value = mapping[key]
-        if kind == "positive integer" and (not isinstance(value, int) or value <= 0):
-            raise SpecError(path, field, "a positive integer", value)
-        return value
-
-    def flag(mapping, key, field):
-        value = mapping.get(key, False)
-        if not isinstance(value, bool):
-            raise SpecError(path, field, "true or false", value)
-        return value
-
-    cams = need(raw, "cameras", "mapping", "cameras")
-    tactile = raw.get("tactile", {"enabled": False})
-    modalities = tuple(cams.get("modalities", CAMERA_MODALITIES))
-    for m in modalities:
-        if m not in CAMERA_MODALITIES + LABEL_MODALITIES:
-            raise SpecError(path, "cameras.modalities", f"entries from {list(CAMERA_MODALITIES + LABEL_MODALITIES)}", m)
-    bounds, voxel = _occupancy(raw.get("occupancy", {}), path)
+    """A profile mapping (a file's, or one built in code), checked by its schema."""
+    m = validate(SensorProfileFile, raw, path)
+    cams, tactile, occupancy = m.cameras, m.tactile, m.occupancy
     return SensorProfile(
-        name=need(raw, "name", "string", "name"),
-        description=raw.get("description", ""),
-        rate_hz=need(raw, "rate_hz", "positive integer", "rate_hz"),
-        camera_ids=tuple(need(cams, "ids", "list of camera ids", "cameras.ids")),
-        width=need(cams, "width", "positive integer", "cameras.width"),
-        height=need(cams, "height", "positive integer", "cameras.height"),
-        modalities=modalities,
-        shadows=flag(cams, "shadows", "cameras.shadows"),
-        clip_near_m=float(cams.get("clip_near_m", 0.01)),
-        clip_far_m=float(cams.get("clip_far_m", 5.0)),
-        tactile_enabled=bool(tactile.get("enabled", False)),
-        tactile_resolution=int(tactile.get("resolution", 240)),
-        tactile_step=int(tactile.get("step", 1)),
-        tactile_max_range_mm=float(tactile.get("max_range_mm", 15.0)),
-        occupancy_bounds_m=bounds,
-        occupancy_voxel_size_m=voxel,
+        name=m.name,
+        description=m.description,
+        rate_hz=m.rate_hz,
+        camera_ids=tuple(cams.ids),
+        width=cams.width,
+        height=cams.height,
+        modalities=tuple(cams.modalities if cams.modalities is not None else CAMERA_MODALITIES),
+        shadows=cams.shadows,
+        clip_near_m=cams.clip_near_m,
+        clip_far_m=cams.clip_far_m,
+        tactile_enabled=tactile.enabled,
+        tactile_resolution=tactile.resolution,
+        tactile_step=tactile.step,
+        tactile_max_range_mm=tactile.max_range_mm,
+        occupancy_bounds_m=tuple(tuple(row) for row in occupancy.bounds_m),
+        occupancy_voxel_size_m=occupancy.voxel_size_m,
         raw=raw,
-        antialias=flag(cams, "antialias", "cameras.antialias"),
-        tessellation=_tessellation(cams.get("tessellation"), path),
+        antialias=cams.antialias,
+        tessellation=tuple(cams.tessellation) if cams.tessellation is not None else None,
     )
-
-
-def _tessellation(value, path) -> tuple[int, int] | None:
-    if value is None:
-        return None
-    if not (isinstance(value, (list, tuple)) and len(value) == 2
-            and all(isinstance(v, int) and not isinstance(v, bool) and 3 <= v <= 128 for v in value)):
-        raise SpecError(path, "cameras.tessellation", "[slices, stacks], integers from 3 to 128", value)
-    return (value[0], value[1])
-
-
-def _occupancy(block, path) -> tuple[tuple, float]:
-    """The `occupancy` block: world bounds [[x0, y0, z0], [x1, y1, z1]] and voxel edge (m)."""
-    from sim.labels.grid import grid_shape
-
-    if not isinstance(block, dict) or set(block) - {"bounds_m", "voxel_size_m"}:
-        raise SpecError(path, "occupancy", "a mapping with keys [bounds_m, voxel_size_m]", block)
-    bounds = block.get("bounds_m", DEFAULT_OCCUPANCY_BOUNDS_M)
-    voxel = block.get("voxel_size_m", DEFAULT_OCCUPANCY_VOXEL_M)
-    numbers = isinstance(bounds, (list, tuple)) and len(bounds) == 2 and all(
-        isinstance(row, (list, tuple)) and len(row) == 3
-        and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in row) for row in bounds)
-    if not numbers:
-        raise SpecError(path, "occupancy.bounds_m", "[[x0, y0, z0], [x1, y1, z1]] in metres", bounds)
-    if isinstance(voxel, bool) or not isinstance(voxel, (int, float)):
-        raise SpecError(path, "occupancy.voxel_size_m", "a positive length in metres", voxel)
-    try:
-        grid_shape(bounds, float(voxel))
-    except ValueError as exc:
-        raise SpecError(path, "occupancy", str(exc)) from exc
-    return tuple(tuple(float(v) for v in row) for row in bounds), float(voxel)
 
 
 # ---------------------------------------------------------------- channels
@@ -199,18 +144,14 @@ class Channel:
 
 
 def channel(name: str) -> Channel:
-    path = catalog_path("channels", name, "channel")
-    raw = load_yaml(path)
-    try:
-        return Channel(
-            name=raw["name"],
-            paper_name=raw["paper_name"],
-            anchored=bool(raw["anchored"]),
-            resample_invariance=bool(raw["resample_invariance"]),
-            resample_equivariance=bool(raw["resample_equivariance"]),
-        )
-    except KeyError as exc:
-        raise SpecError(path, exc.args[0], "a value") from exc
+    return read_channel(catalog_path("channels", name, "channel"))
+
+
+def read_channel(path: Path) -> Channel:
+    """One channel file, checked by its schema."""
+    m = validate(ChannelFile, load_yaml(path), path)
+    return Channel(name=m.name, paper_name=m.paper_name, anchored=m.anchored,
+                   resample_invariance=m.resample_invariance, resample_equivariance=m.resample_equivariance)
 
 
 CHANNEL_ORDER = ("none", "equi_only", "inv_only", "inv_equi")
@@ -239,25 +180,16 @@ class Setting:
         """Marked available and both the task and the embodiment files are in the catalog."""
         return self.marked_available and self.task in names("tasks") and self.embodiment in names("embodiments")
 
-    @property
-    def recordable(self) -> bool:
-        """Available and its task has a demonstration plan for the scripted operator."""
-        if not self.available:
-            return False
-        from sim.tasks import load_task     # tasks import the registry: load lazily
-        return bool(load_task(self.task).demo_plan)
-
 
 @lru_cache(maxsize=1)
 def paper_settings() -> tuple[Setting, ...]:
-    path = CATALOG / "settings.yaml"
-    out = []
-    for i, s in enumerate(load_yaml(path)["paper_settings"]):
-        flag = s.get("available", True)
-        if not isinstance(flag, bool):
-            raise SpecError(path, f"paper_settings[{i}].available", "true or false", flag)
-        out.append(Setting(s["task"], s["embodiment"], flag))
-    return tuple(out)
+    return read_settings(CATALOG / "settings.yaml")
+
+
+def read_settings(path: Path) -> tuple[Setting, ...]:
+    """A settings file (the paper's: `sim/catalog/settings.yaml`), checked by its schema."""
+    m = validate(SettingsFile, load_yaml(path), path)
+    return tuple(Setting(s.task, s.embodiment, s.available) for s in m.paper_settings)
 
 
 def parse_setting_key(key: str) -> Setting:

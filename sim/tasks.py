@@ -3,8 +3,9 @@
 A task declares its table, its objects (primitives and generated shapes built by b2d, or mesh
 files; fixed or free, with articulated links), where they start (a pose or a placement zone), an
 optional scripted demonstration plan (sim/demo_plan.py) and its `metrics` block, which the shared
-evaluator compiles at load time. No task needs Python of its own. Masses, frictions and densities are range-checked
-(`sim.scene.fields`).
+evaluator compiles at load time. No task needs Python of its own. The file's keys, types and ranges
+(masses, frictions, densities: `sim.scene.fields`) are checked by its schema (`sim.schema.task`); this
+module builds the objects and checks what refers across them.
 """
 
 from __future__ import annotations
@@ -19,21 +20,16 @@ from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
 from evaluation import EpisodeEvaluator, TaskContext, TaskSpecError
 from evaluation.state import ObjectInfo
-from sim.registry import catalog_path, load_yaml, names
+from sim.registry import Setting, catalog_path, load_yaml, names
 from sim.scene.articulated import LinkSpec, parse_links
-from sim.scene.fields import (DENSITY_RANGE_KG_M3, FRICTION_RANGE, MASS_RANGE_KG, ROLLING_FRICTION_RANGE_M,
-                              num_list, number)
+from sim.scene.fields import MASS_RANGE_KG
 from sim.scene.parts import Cavity, Part, parse_part, parse_parts, parts_aabb
+from sim.schema import validate
+from sim.schema.task import TABLE_HEIGHT_RANGE_M, TABLE_THICKNESS_RANGE_M, Table, TaskFile, TaskObject  # noqa: F401
 
-DEFAULT_TABLE_HEIGHT = 0.75
+DEFAULT_TABLE_HEIGHT = 0.75      # the schema's default (sim.schema.task.Table)
 DEFAULT_MASS_KG = 0.1
-OBJECT_KEYS = ("shape", "size", "parts", "mesh", "mass", "density", "friction", "rolling_friction", "rgba", "pose",
-               "zone", "fixed_pose", "container", "base", "links", "key_rows", "mouth_axis")
-GEOMETRY_KEYS = ("shape", "parts", "mesh")     # exactly one ("size" goes with "shape")
-BASES = ("free", "fixed")          # fixed: the base is part of the world (fridge, toilet, piano)
 CENTRE_TOLERANCE_M = 0.005
-TABLE_HEIGHT_RANGE_M = (0.4, 1.2)
-TABLE_THICKNESS_RANGE_M = (0.01, 0.2)
 
 
 @dataclass(frozen=True)
@@ -122,11 +118,7 @@ class TaskSpec:
 
 def _geometry(path, where, raw) -> tuple[tuple[Part, ...], Cavity | None]:
     """shape + size (one primitive), mesh (one mesh file) or parts (primitives, generated shapes
-    and meshes)."""
-    given = [k for k in GEOMETRY_KEYS if k in raw]
-    if len(given) != 1 or ("size" in raw) != ("shape" in raw):
-        raise SpecError(path, where, "exactly one of 'shape' with 'size' (one primitive), 'mesh' (a mesh file) "
-                        "or 'parts'", sorted(k for k in raw if k in (*GEOMETRY_KEYS, "size")))
+    and meshes); the schema has checked that exactly one is given."""
     if "parts" in raw:
         return parse_parts(path, f"{where}.parts", raw["parts"])
     if "mesh" in raw:
@@ -136,114 +128,57 @@ def _geometry(path, where, raw) -> tuple[tuple[Part, ...], Cavity | None]:
     return tuple(parts), None
 
 
-def _mass(path, where, raw, parts) -> float:
+def _mass(path, where, obj: TaskObject, parts) -> float:
     """The declared mass, or the density times the parts' volume (a mesh part: its hull's)."""
-    if "mass" in raw and "density" in raw:
-        raise SpecError(path, where, "one of 'mass' (kg) or 'density' (kg/m^3), not both")
-    if "density" in raw:
-        density = number(path, f"{where}.density", raw["density"], *DENSITY_RANGE_KG_M3, unit="kg/m^3")
-        mass = density * sum(p.volume for p in parts)
+    if obj.density is not None:
+        mass = obj.density * sum(p.volume for p in parts)
         low, high = MASS_RANGE_KG
         if not low <= mass <= high:
             raise SpecError(path, f"{where}.density", f"a density giving a mass in [{low}, {high}] kg "
-                            f"(this one gives {mass:.4g} kg)", raw["density"])
+                            f"(this one gives {mass:.4g} kg)", obj.density)
         return float(mass)
-    return number(path, f"{where}.mass", raw.get("mass", DEFAULT_MASS_KG), *MASS_RANGE_KG, unit="kg")
+    return obj.mass if obj.mass is not None else DEFAULT_MASS_KG
 
 
-def _parse_object(path, name, raw, zones, earlier) -> ObjectSpec:
+def _parse_object(path, name, raw: dict, obj: TaskObject, zones, earlier) -> ObjectSpec:
+    """One object: the schema checked its keys, types and ranges; here its geometry and references."""
     where = f"objects.{name}"
-    if not isinstance(raw, dict):
-        raise SpecError(path, where, "a mapping", raw)
-    for key in raw:
-        if key not in OBJECT_KEYS:
-            raise SpecError(path, f"{where}.{key}", f"an object key {list(OBJECT_KEYS)}")
     parts, cavity = _geometry(path, where, raw)
     lo, hi = parts_aabb(parts)
     if np.abs((lo + hi) / 2).max() > CENTRE_TOLERANCE_M:
         raise SpecError(path, f"{where}.parts", "parts centred on the object frame (the evaluator's box "
                         f"centre); shift them by {(-(lo + hi) / 2).round(4).tolist()}")
-    pose = raw.get("pose")
-    zone = raw.get("zone")
-    if (pose is None) == (zone is None):
-        raise SpecError(path, where, "exactly one of 'pose' or 'zone'")
-    if zone is not None and zone not in zones:
-        raise SpecError(path, f"{where}.zone", f"a zone from {sorted(zones)}", zone)
-    if pose is not None and not isinstance(pose, dict):
-        raise SpecError(path, f"{where}.pose", "a mapping {xy, yaw_deg}", pose)
-    for key in pose or {}:
-        if key not in ("xy", "yaw_deg", "support"):
-            raise SpecError(path, f"{where}.pose.{key}", "a pose key ['xy', 'yaw_deg', 'support']")
-    xy = num_list(path, f"{where}.pose.xy", pose.get("xy"), 2) if pose else None
-    on = (pose or {}).get("support")      # starts standing on this object ("on" is a YAML boolean)
+    pose = obj.pose
+    if obj.zone is not None and obj.zone not in zones:
+        raise SpecError(path, f"{where}.zone", f"a zone from {sorted(zones)}", obj.zone)
+    on = pose.support if pose is not None else None
     if on is not None and on not in earlier:
         raise SpecError(path, f"{where}.pose.support", f"an object declared before {name!r}: {sorted(earlier)}", on)
-    if not isinstance(raw.get("fixed_pose", False), bool):
-        raise SpecError(path, f"{where}.fixed_pose", "true or false", raw["fixed_pose"])
-    base = raw.get("base", "free")
-    if base not in BASES:
-        raise SpecError(path, f"{where}.base", f"one of {list(BASES)}", base)
-    container = raw.get("container")
-    if container is not None:
-        if not isinstance(container, dict) or "interior_half_extents" not in container:
-            raise SpecError(path, f"{where}.container", "a mapping {interior_half_extents, interior_offset}", container)
-        interior = num_list(path, f"{where}.container.interior_half_extents", container["interior_half_extents"], 3)
-        offset = num_list(path, f"{where}.container.interior_offset", container.get("interior_offset", [0, 0, 0]), 3)
+    if obj.container is not None:
+        interior = tuple(obj.container.interior_half_extents)
+        offset = tuple(obj.container.interior_offset)
     elif cavity is not None:      # a generated open shape brings its own cavity
         interior, offset = cavity.half_extents, cavity.offset
     else:
         interior = offset = None
     return ObjectSpec(
         name=name,
-        mass=_mass(path, where, raw, parts),
-        friction=number(path, f"{where}.friction", raw.get("friction", 1.0), *FRICTION_RANGE),
-        rgba=num_list(path, f"{where}.rgba", raw.get("rgba", [0.7, 0.7, 0.7, 1.0]), 4),
-        xy=xy,
-        yaw_deg=number(path, f"{where}.pose.yaw_deg", (pose or {}).get("yaw_deg", 0.0), unit="degrees"),
-        zone=zone,
-        fixed_pose=raw.get("fixed_pose", False),
-        rolling_friction=number(path, f"{where}.rolling_friction", raw.get("rolling_friction", 0.0),
-                                *ROLLING_FRICTION_RANGE_M, unit="m"),
+        mass=_mass(path, where, obj, parts),
+        friction=obj.friction,
+        rgba=tuple(obj.rgba),
+        xy=tuple(pose.xy) if pose is not None else None,
+        yaw_deg=pose.yaw_deg if pose is not None else 0.0,
+        zone=obj.zone,
+        fixed_pose=obj.fixed_pose,
+        rolling_friction=obj.rolling_friction,
         interior_half_extents=interior,
         interior_offset=offset,
         parts=parts,
         links=parse_links(path, where, raw),
-        base=base,
-        mouth_axis=num_list(path, f"{where}.mouth_axis", raw["mouth_axis"], 3) if "mouth_axis" in raw else None,
+        base=obj.base,
+        mouth_axis=tuple(obj.mouth_axis) if obj.mouth_axis is not None else None,
         on=on,
     )
-
-
-def _mapping(path, field: str, value, what: str) -> dict:
-    """An optional top-level block: absent is empty, anything but a mapping is an error."""
-    value = {} if value is None else value
-    if not isinstance(value, dict):
-        raise SpecError(path, field, what, value)
-    return value
-
-
-def _parse_zones(path, raw) -> dict[str, dict]:
-    zones = _mapping(path, "zones", raw.get("zones"), "a mapping of zone name -> zone")
-    for name, zone in zones.items():
-        ok = isinstance(zone, dict) and (set(zone) == {"xy_min", "xy_max"} or set(zone) == {"center_xy", "radius"})
-        if not ok:
-            raise SpecError(path, f"zones.{name}", "{xy_min: [x, y], xy_max: [x, y]} or {center_xy: [x, y], radius: r}",
-                            zone)
-        for key, value in zone.items():
-            if key == "radius":
-                number(path, f"zones.{name}.radius", value, 0.0, low_open=True, unit="m")
-            else:
-                num_list(path, f"zones.{name}.{key}", value, 2)
-        if "xy_min" in zone and not all(a < b for a, b in zip(zone["xy_min"], zone["xy_max"])):
-            raise SpecError(path, f"zones.{name}", "xy_min below xy_max on both axes", zone)
-    return zones
-
-
-def _parse_points(path, raw) -> dict[str, list]:
-    points = _mapping(path, "points", raw.get("points"), "a mapping of point name -> [x, y, z]")
-    for name, p in points.items():
-        num_list(path, f"points.{name}", p, 3)
-    return points
 
 
 def task_context(task: TaskSpec) -> TaskContext:
@@ -261,34 +196,24 @@ def task_context(task: TaskSpec) -> TaskContext:
 
 
 def parse_task(raw: dict, path: Path) -> TaskSpec:
-    for key in ("name", "instruction", "objects", "metrics"):
-        if key not in raw:
-            raise SpecError(path, key, "a value")
-    if not isinstance(raw["objects"], dict) or not raw["objects"]:
-        raise SpecError(path, "objects", "a mapping of object name -> object", raw["objects"])
-    zones = _parse_zones(path, raw)
-    points = _parse_points(path, raw)
+    m = validate(TaskFile, raw, path)
+    zones = raw.get("zones") or {}
+    points = raw.get("points") or {}
     objects: dict[str, ObjectSpec] = {}
-    for n, o in raw["objects"].items():
-        objects[n] = _parse_object(path, n, o, zones, dict(objects))
-    table = _mapping(path, "table", raw.get("table"), "a mapping {height, size_xy, thickness, friction}")
-    embodiment = raw.get("paper_embodiment", "")
+    for n, obj in m.objects.items():
+        objects[n] = _parse_object(path, n, raw["objects"][n], obj, zones, dict(objects))
+    table = m.table or Table()
+    embodiment = m.paper_embodiment
     if embodiment and embodiment not in names("embodiments"):
         raise SpecError(path, "paper_embodiment", f"an embodiment from {names('embodiments')}", embodiment)
     task = TaskSpec(
-        name=raw["name"],
-        display_name=raw.get("display_name", raw["name"]),
-        instruction=raw["instruction"],
-        success_condition=raw.get("success_condition", ""),
+        name=m.name,
+        display_name=m.display_name if m.display_name is not None else m.name,
+        instruction=m.instruction,
+        success_condition=m.success_condition,
         paper_embodiment=embodiment,
-        table=TableSpec(
-            height=number(path, "table.height", table.get("height", DEFAULT_TABLE_HEIGHT), *TABLE_HEIGHT_RANGE_M,
-                          unit="m"),
-            size_xy=num_list(path, "table.size_xy", table.get("size_xy", [1.2, 0.8]), 2, positive=True),
-            thickness=number(path, "table.thickness", table.get("thickness", 0.04), *TABLE_THICKNESS_RANGE_M,
-                             unit="m"),
-            friction=number(path, "table.friction", table.get("friction", 0.8), *FRICTION_RANGE),
-        ),
+        table=TableSpec(height=table.height, size_xy=tuple(table.size_xy), thickness=table.thickness,
+                        friction=table.friction),
         objects=objects,
         zones=zones,
         points=points,
@@ -308,3 +233,9 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
 def load_task(name: str) -> TaskSpec:
     path = catalog_path("tasks", name, "task")
     return parse_task(load_yaml(path), path)
+
+
+def is_recordable(setting: Setting) -> bool:
+    """Available and its task has a demonstration plan for the scripted operator. (Here, not on `Setting`:
+    the registry stays below the tasks, with no import back.)"""
+    return setting.available and bool(load_task(setting.task).demo_plan)

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from sim.registry import paper_settings, parse_setting_key
+from sim.tasks import is_recordable
 from teleop.demos import DEFAULT_OPERATOR, record_demonstrations
 
 
@@ -25,7 +26,7 @@ def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: s
         if only and setting.key not in only:
             continue
         row = {"setting": setting.key, "episodes": episodes}
-        if not setting.recordable:
+        if not is_recordable(setting):
             rows.append({**row, "successes": 0, "status": "no demo_plan"})
             continue
         t0 = time.perf_counter()

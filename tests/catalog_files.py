@@ -5,10 +5,11 @@ import contextlib
 
 import yaml
 
-from sim.embodiment import description
+from sim.embodiment import catalog_paths, description
 
 # kind -> (the module attribute naming the folder, the cached loader that reads it)
-KINDS = {"arms": ("ARMS_DIR", "load_arm"), "hands": ("HANDS_DIR", "load_hand")}
+KINDS = {"arms": ("ARMS_DIR", "load_arm"), "hands": ("HANDS_DIR", "load_hand"),
+         "embodiments": ("EMBODIMENTS_DIR", "load_embodiment")}
 
 
 @contextlib.contextmanager
@@ -22,7 +23,7 @@ def edited_catalog_file(monkeypatch, folder, kind: str, name: str, edit):
     path = folder / f"{name}.yaml"
     path.write_text(yaml.safe_dump(raw))
     with monkeypatch.context() as patch:
-        patch.setattr(description, dir_attr, folder)
+        patch.setattr(catalog_paths, dir_attr, folder)     # the loaders read the folder from there
         loader.cache_clear()
         try:
             yield path

@@ -18,7 +18,9 @@ import dataclasses
 
 import numpy as np
 
-from .description import GeomSpec, JointSpec, LinkSpec, TactilePad, Transform
+from .frames import Transform
+from .links import GeomSpec, JointSpec, LinkSpec
+from .tactile_block import TactilePad
 
 M = np.diag([-1.0, 1.0, 1.0])
 

@@ -37,7 +37,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from .description import HandDescription, LinkSpec, Transform, _Ctx, _get, _num, _transform, mat_to_quat
+from .fields import _Ctx, _get, _num, _transform
+from .frames import Transform, mat_to_quat
+from .hand_file import HandDescription
+from .links import LinkSpec
 from .mirror import side_transform
 
 HAND_MODELS = ("generated", "real")

@@ -13,8 +13,9 @@ and the scale from human to robot hand size::
       - {finger: thumb, keypoint: thumb_tip, body: link_thumb_3, pos: [0, 0.0098, 0.0326]}
       - ...
 
-The block lives in the hand file, so it is read here from the same file as ``load_hand`` (safe YAML)
-and checked against the parsed hand (bodies, fingers). Positions are for the RIGHT hand like the
+The block lives in the hand file, so it is read here from the same file as ``load_hand`` (safe YAML);
+its keys, types and ranges are the hand schema's (``sim.schema.hand.Retarget``), checked again here
+for a block given on its own, and its bodies and fingers are checked against the parsed hand. Positions are for the RIGHT hand like the
 rest of the file; the left hand is its mirror image with the same joint angles (``mirror.py``).
 """
 
@@ -26,8 +27,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from sim.registry import load_yaml
+from sim.schema import validate
+from sim.schema.hand import FINGERTIP_KEYPOINTS, Retarget
 
-from .description import DescriptionError, HandDescription, load_hand
+from .fields import DescriptionError
+from .hand_file import HandDescription, load_hand
 
 # The 21 MediaPipe hand landmarks, in MediaPipe's order.
 MEDIAPIPE_KEYPOINTS = (
@@ -38,7 +42,6 @@ MEDIAPIPE_KEYPOINTS = (
     "ring_mcp", "ring_pip", "ring_dip", "ring_tip",
     "pinky_mcp", "pinky_pip", "pinky_dip", "pinky_tip",
 )
-FINGERTIP_KEYPOINTS = ("thumb_tip", "index_tip", "middle_tip", "ring_tip", "pinky_tip")
 
 
 @dataclass(frozen=True)
@@ -70,19 +73,10 @@ def _fail(hand: HandDescription, field: str, msg: str):
     raise DescriptionError(f"{hand.path}: field 'retarget.{field}': {msg}")
 
 
-def _point(raw, hand: HandDescription, field: str, links: set[str]) -> RobotPoint:
-    if not isinstance(raw, dict):
-        _fail(hand, field, f"expected a mapping with 'body' and 'pos', got {raw!r}")
-    body = raw.get("body")
-    if body not in links:
-        _fail(hand, f"{field}.body", f"expected a link of this hand {sorted(links)}, got {body!r}")
-    try:
-        pos = np.asarray([float(v) for v in raw.get("pos", [0, 0, 0])], float)
-    except (TypeError, ValueError):
-        _fail(hand, f"{field}.pos", f"expected a list of 3 numbers, got {raw.get('pos')!r}")
-    if pos.shape != (3,):
-        _fail(hand, f"{field}.pos", f"expected a list of 3 numbers, got {len(pos)}")
-    return RobotPoint(str(body), pos)
+def _point(point, hand: HandDescription, field: str, links: set[str]) -> RobotPoint:
+    if point.body not in links:
+        _fail(hand, f"{field}.body", f"expected a link of this hand {sorted(links)}, got {point.body!r}")
+    return RobotPoint(point.body, np.asarray(point.pos, float))
 
 
 @functools.lru_cache(maxsize=None)
@@ -94,30 +88,18 @@ def load_retarget_spec(hand_name: str) -> RetargetSpec:
 
 def parse_retarget_spec(raw, hand: HandDescription) -> RetargetSpec:
     """Check a `retarget:` block (parsed YAML) against its hand; errors name the file and field."""
-    if not isinstance(raw, dict):
+    if raw is None:
         raise DescriptionError(f"{hand.path}: field 'retarget': missing (expected scale, wrist and "
                                f"fingertips for DexPilot retargeting)")
+    block = validate(Retarget, raw, hand.path, prefix="retarget", error=DescriptionError)   # keys, types, ranges
     links = {link.name for link in hand.links}
-    try:
-        scale = float(raw.get("scale"))
-    except (TypeError, ValueError):
-        _fail(hand, "scale", f"expected a positive number, got {raw.get('scale')!r}")
-    if not scale > 0:
-        _fail(hand, "scale", f"expected a positive number, got {scale}")
-    wrist = _point(raw.get("wrist"), hand, "wrist", links)
-    tips_raw = raw.get("fingertips")
-    if not isinstance(tips_raw, list):
-        _fail(hand, "fingertips", f"expected a list with one entry per finger {list(hand.fingers)}")
+    wrist = _point(block.wrist, hand, "wrist", links)
     tips = []
-    for i, t in enumerate(tips_raw):
+    for i, t in enumerate(block.fingertips):
         field = f"fingertips[{i}]"
-        if not isinstance(t, dict):
-            _fail(hand, field, f"expected a mapping, got {t!r}")
-        if t.get("finger") not in hand.fingers:
-            _fail(hand, f"{field}.finger", f"expected one of the fingers {list(hand.fingers)}, got {t.get('finger')!r}")
-        if t.get("keypoint") not in FINGERTIP_KEYPOINTS:
-            _fail(hand, f"{field}.keypoint", f"expected one of {FINGERTIP_KEYPOINTS}, got {t.get('keypoint')!r}")
-        tips.append(Fingertip(str(t["finger"]), str(t["keypoint"]), _point(t, hand, field, links)))
+        if t.finger not in hand.fingers:
+            _fail(hand, f"{field}.finger", f"expected one of the fingers {list(hand.fingers)}, got {t.finger!r}")
+        tips.append(Fingertip(t.finger, t.keypoint, _point(t, hand, field, links)))
     fingers = [t.finger for t in tips]
     if sorted(fingers) != sorted(hand.fingers):
         _fail(hand, "fingertips", f"expected exactly one entry per finger {list(hand.fingers)}, got {fingers}")
@@ -127,4 +109,4 @@ def parse_retarget_spec(raw, hand: HandDescription) -> RetargetSpec:
     if "thumb_tip" not in keypoints:
         _fail(hand, "fingertips", "one fingertip must follow 'thumb_tip' (DexPilot's pinch terms need a thumb)")
     tips.sort(key=lambda t: FINGERTIP_KEYPOINTS.index(t.keypoint))    # thumb first, then MediaPipe order
-    return RetargetSpec(hand=hand.name, scale=scale, wrist=wrist, fingertips=tuple(tips))
+    return RetargetSpec(hand=hand.name, scale=block.scale, wrist=wrist, fingertips=tuple(tips))

@@ -205,7 +205,7 @@ def parse_part(path, field: str, raw) -> tuple[list[Part], Cavity | None]:
         return [Part("mesh", half, pos, quat, rgba, ref)], None
     _keys(path, field, raw, PART_KEYS, f"a mesh, a generated shape {list(GENERATORS)} or a part key")
     shape = raw.get("shape")
-    if shape not in SHAPE_SIZE_LEN:
+    if not isinstance(shape, str) or shape not in SHAPE_SIZE_LEN:     # a list or mapping is not a shape name
         raise SpecError(path, f"{field}.shape", f"one of {sorted(SHAPE_SIZE_LEN)} (or a mesh or a generated "
                         f"shape {list(GENERATORS)})", shape)
     size = num_list(path, f"{field}.size", raw.get("size"), SHAPE_SIZE_LEN[shape], positive=True)

@@ -5,12 +5,12 @@ import mujoco
 import pytest
 import yaml
 
-from sim.embodiment import add_bimanual_robot, description
+from sim.embodiment import add_bimanual_robot, catalog_paths, description
 
 
 @pytest.fixture
 def embodiments_dir(tmp_path, monkeypatch):
-    monkeypatch.setattr(description, "EMBODIMENTS_DIR", tmp_path)
+    monkeypatch.setattr(catalog_paths, "EMBODIMENTS_DIR", tmp_path)     # the loaders read the folder from there
     description.load_embodiment.cache_clear()
     yield tmp_path
     description.load_embodiment.cache_clear()

@@ -31,7 +31,7 @@ def test_label_modalities_are_accepted_and_unknown_ones_named():
     profile = parse_sensor_profile(_raw(cameras={**cams, "modalities": ["rgb", "segmentation", "box2d", "box3d",
                                                                         "occupancy"]}))
     assert "occupancy" in profile.modalities
-    with pytest.raises(SpecError, match=r"bad.yaml: field 'cameras.modalities'.*'boxes'"):
+    with pytest.raises(SpecError, match=r"bad.yaml: field 'cameras.modalities\[1\]'.*'boxes'"):
         parse_sensor_profile(_raw(cameras={**cams, "modalities": ["rgb", "boxes"]}), "bad.yaml")
 
 
@@ -39,9 +39,9 @@ def test_label_modalities_are_accepted_and_unknown_ones_named():
     ({"bounds_m": [[0, 0, 0], [1, 1]]}, "occupancy.bounds_m", "[[x0, y0, z0], [x1, y1, z1]]"),
     ({"bounds_m": [[0, 0, 1], [1, 1, 0]]}, "occupancy", "x0 < x1"),
     ({"voxel_size_m": 0.03}, "occupancy", "whole number of 0.03 m voxels"),
-    ({"voxel_size_m": -0.01}, "occupancy", "positive length"),
+    ({"voxel_size_m": -0.01}, "occupancy.voxel_size_m", "positive length"),
     ({"voxel_size_m": "1cm"}, "occupancy.voxel_size_m", "positive length"),
-    ({"voxel": 0.01}, "occupancy", "keys [bounds_m, voxel_size_m]"),
+    ({"voxel": 0.01}, "occupancy.voxel", "a key from ['bounds_m', 'voxel_size_m'] (unknown key 'voxel')"),
 ])
 def test_bad_occupancy_blocks_name_the_file_and_field(block, field, text):
     with pytest.raises(SpecError) as err:

@@ -1,0 +1,108 @@
+"""Schema of `sim/catalog/hands/<name>.yaml` (conventions: sim/embodiment/description.py).
+
+The `tactile` and `real_model` blocks are mappings here: each has its own validator
+(sim/embodiment/tactile_block.py, real_model.py) whose rules look across the block and the hand's links,
+fingers and actuators. What refers to links, joints and actuators is checked by the loaders."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field
+
+from .base import CatalogModel, Name, Number, PositiveNumber, Str, Vec3, ranged
+from .robot_parts import (SPAN_M, Angle, Frame, GeomDefaults, Joint, JointDefaults, Length, LinkPair, Mass,
+                          MassProperties, Point3)
+
+
+class Palm(MassProperties):
+    name: Name
+
+
+class FingerLink(MassProperties):
+    name: Name
+    origin: Frame | None = None          # without xyz: at the end of the previous link (its length along z)
+    joints: list[Joint] = []
+    length: Number = ranged(0.0, ge=0, le=SPAN_M, unit="m")
+    radius: Length | None = None          # a capsule phalanx along +z, `length` long
+
+
+class Finger(CatalogModel):
+    name: Name
+    parent: Name | None = None
+    links: list[FingerLink] = Field(min_length=1)
+
+
+class Actuator(CatalogModel):
+    joint: Name
+    name: Name | None = None
+    effort: PositiveNumber | None = None
+    velocity: PositiveNumber | None = None
+    kp: Number | None = None
+    kv: Number | None = None
+
+
+class Coupling(CatalogModel):
+    joint: Name      # follower
+    master: Name
+    polycoef: Annotated[list[Number], Field(min_length=1, max_length=5)]   # constant first
+
+
+class GraspProbe(CatalogModel):
+    radius: Length
+    half_length: Length
+    mass: Mass
+    pos: Point3
+    axis: Vec3 | None = None
+    close: dict[str, Number]
+
+
+class TabletopGrasp(CatalogModel):
+    centre: Point3
+    close: dict[str, Number]
+    late: list[Name] = []
+
+
+# MediaPipe's fingertip landmarks (sim/embodiment/retarget_spec.py)
+FINGERTIP_KEYPOINTS = ("thumb_tip", "index_tip", "middle_tip", "ring_tip", "pinky_tip")
+
+
+class RobotPoint(CatalogModel):
+    body: Name                      # a link of this hand (checked by the loader)
+    pos: Point3 = [0.0, 0.0, 0.0]   # in the link frame
+
+
+class Fingertip(RobotPoint):
+    finger: Name
+    keypoint: Literal[FINGERTIP_KEYPOINTS]
+
+
+class Retarget(CatalogModel):
+    """DexPilot retargeting: robot points that stand for the operator's wrist and fingertips."""
+
+    scale: PositiveNumber           # robot / human hand size
+    wrist: RobotPoint
+    fingertips: list[Fingertip] = Field(description="a list with one entry per finger")
+
+
+class HandFile(CatalogModel):
+    name: Name | None = None
+    display_name: Str | None = None
+    source: Str
+    assumptions: Str = ""
+    mount: Frame | None = None
+    palm: Palm
+    fingers: list[Finger] = Field(min_length=1)
+    actuators: list[Actuator] = Field(min_length=1)
+    couplings: list[Coupling] | None = None
+    wrist_site: Frame
+    home: dict[str, Angle] | None = None
+    grasp_probe: GraspProbe | None = None
+    tabletop_grasp: TabletopGrasp | None = None
+    tactile: dict
+    real_model: dict | None = None
+    retarget: Retarget | None = None
+    contact_exclude: list[LinkPair] | None = None
+    servo_error_at_full_effort: PositiveNumber = 0.1
+    joint_defaults: JointDefaults | None = None
+    geom_defaults: GeomDefaults | None = None
