@@ -16,7 +16,7 @@ import h5py
 import hdf5plugin  # noqa: F401  (registers the image filters of episodes.writer)
 import numpy as np
 
-from episodes.atomic import atomic_path
+from episodes.atomic import atomic_path, guarded_h5
 
 
 def _datasets(f: h5py.File) -> dict[str, h5py.Dataset]:
@@ -51,7 +51,7 @@ def concat_frames(parts: list[Path], out_path: Path, frame_axis_datasets: tuple[
             odd = [n for n, ds in sets.items() if ds.dtype != first[n].dtype or ds.shape[1:] != first[n].shape[1:]]
             if odd:
                 raise ValueError(f"{path}: dtype or frame shape differs from {parts[0].name} in {odd[:5]}")
-        with atomic_path(out_path) as tmp, h5py.File(tmp, "w") as out:
+        with atomic_path(out_path) as tmp, guarded_h5(tmp) as out:
             out.attrs.update(dict(files[0].attrs))
             for name, ds in first.items():
                 if (ds.ndim and ds.maxshape[0] is None) or name in frame_axis_datasets:
@@ -61,6 +61,25 @@ def concat_frames(parts: list[Path], out_path: Path, frame_axis_datasets: tuple[
     finally:
         for f in files:
             f.close()
+
+
+def copy_in_name_order(src: h5py.Group, dst: h5py.File, name: str) -> None:
+    """Copy group `src` to `dst[name]` dataset by dataset, in name order, its groups made afresh.
+
+    Copying the group whole (H5Ocopy) keeps the source's object headers as its writing history left
+    them: a render written frame by frame and one joined from parts hold the same datasets, but the
+    episodes copied from them differed in bytes (groups of more than 8 links differ in layout). Copied
+    this way the episode's bytes depend only on the content (issue 23: the same sha256 for any number
+    of render workers)."""
+    groups = {"": src}
+    src.visititems(lambda path, obj: groups.__setitem__(path, obj) if isinstance(obj, h5py.Group) else None)
+    for path, group in sorted(groups.items()):      # groups' attributes, if any, come along
+        made = dst.require_group(f"{name}/{path}" if path else name)
+        for key in sorted(group.attrs):
+            made.attrs[key] = group.attrs[key]
+    for path, ds in sorted(_datasets(src).items()):
+        parent, _, leaf = f"{name}/{path}".rpartition("/")
+        src.file.copy(ds, dst[parent], name=leaf)
 
 
 def _filters(ds: h5py.Dataset) -> tuple:
@@ -73,14 +92,17 @@ def _create_like(out: h5py.File, name: str, src: h5py.Dataset, total: int) -> h5
     """An extendable dataset of `total` frames with the source's chunks and filters (its creation
     property list): plugin filters (hdf5plugin's Zstd, Blosc) carry over, which h5py's
     `compression=` keyword cannot name."""
-    if src.chunks is None:      # a small contiguous dataset along the frame axis: no filters to keep
-        return out.create_dataset(name, shape=(total, *src.shape[1:]), maxshape=(None, *src.shape[1:]),
-                                  dtype=src.dtype, chunks=True)
+    if src.chunks is None:      # a small contiguous dataset along the frame axis, kept contiguous as one writer makes it
+        return out.create_dataset(name, shape=(total, *src.shape[1:]), dtype=src.dtype)
     space = h5py.h5s.create_simple((total, *src.shape[1:]), (h5py.h5s.UNLIMITED, *src.shape[1:]))
-    links = h5py.h5p.create(h5py.h5p.LINK_CREATE)
-    links.set_create_intermediate_group(True)
-    dsid = h5py.h5d.create(out.id, name.encode(), src.id.get_type(), space, dcpl=src.id.get_create_plist(),
-                           lcpl=links)
+    # no timestamps: a source's creation property list reads back with HDF5's default (record the
+    # creation time), and the joined file's bytes then changed from run to run (issue 23). Parent groups
+    # through h5py, which makes them without timestamps too.
+    dcpl = src.id.get_create_plist()
+    dcpl.set_obj_track_times(False)
+    parent, _, leaf = name.rpartition("/")
+    group = out.require_group(parent) if parent else out
+    dsid = h5py.h5d.create(group.id, leaf.encode(), src.id.get_type(), space, dcpl=dcpl)
     return h5py.Dataset(dsid)
 
 

@@ -35,7 +35,7 @@ class EpisodeReader:
         return int(self._file["time/frame_index"].shape[0])
 
     def meta(self, key: str):
-        value = self._file[f"meta/{key}"][()]
+        value = self._get(f"meta/{key}", ())
         if isinstance(value, bytes):
             value = value.decode()
             try:
@@ -64,10 +64,10 @@ class EpisodeReader:
     def read(self, dataset: str, start: int = 0, stop: int | None = None) -> np.ndarray:
         """Frames [start, stop) of one per-frame dataset, e.g. "cameras/chest/rgb"; only the
         chunks covering the range are read and decompressed."""
-        return self._file[dataset][start:stop]
+        return self._get(dataset, slice(start, stop))
 
     def static(self, dataset: str):
-        value = self._file[dataset][()]
+        value = self._get(dataset, ())
         if isinstance(value, bytes):
             return value.decode()
         if isinstance(value, np.ndarray) and value.dtype.kind == "O":
@@ -75,7 +75,25 @@ class EpisodeReader:
         return value
 
     def metrics(self) -> dict:
-        return json.loads(self.static("metrics/episode"))
+        try:
+            return json.loads(self.static("metrics/episode"))
+        except ValueError as exc:
+            raise SpecError(self.path, "metrics/episode", "a JSON document", f"{type(exc).__name__}: {exc}") from None
+
+    def _get(self, dataset: str, selection):
+        """A selection of a dataset; SpecError naming the file and the dataset when it is missing or
+        its data cannot be decoded (a corrupt file raised h5py's own errors before: issue 23)."""
+        try:
+            node = self._file[dataset]
+        except (KeyError, ValueError, OSError, RuntimeError) as exc:
+            raise SpecError(self.path, dataset, "a dataset", f"missing or unreadable ({type(exc).__name__})") from None
+        if not isinstance(node, h5py.Dataset):
+            raise SpecError(self.path, dataset, "a dataset", f"a {type(node).__name__}")
+        try:
+            return node[selection]
+        except (OSError, ValueError, TypeError, RuntimeError) as exc:
+            raise SpecError(self.path, dataset, "readable data (the file is corrupt)",
+                            f"{type(exc).__name__}: {str(exc)[:120]}") from None
 
 
 EPISODE_SCHEMA_FAMILY = schema.SCHEMA_VERSION.rsplit("/", 1)[0] + "/"
@@ -91,12 +109,19 @@ def open_episode(path: str | Path) -> EpisodeReader:
     except OSError as exc:
         raise SpecError(path, "<file>", "a readable HDF5 episode (file is truncated or not HDF5)") from exc
     # any version of the layout: what each command needs is checked node by node when it is read
-    version = reader.static("meta/schema_version") if "meta/schema_version" in reader else None
+    try:
+        version = reader.static("meta/schema_version") if "meta/schema_version" in reader else None
+    except SpecError:
+        reader.close()
+        raise
+    except Exception as exc:        # corrupt metadata
+        reader.close()
+        raise SpecError(path, "meta/schema_version", "a readable b2d episode", f"{type(exc).__name__}: {exc}") from None
     if not (isinstance(version, str) and version.startswith(EPISODE_SCHEMA_FAMILY)):
         reader.close()
         raise SpecError(path, "meta/schema_version", f"'{schema.SCHEMA_VERSION}' or another "
                                                      f"'{EPISODE_SCHEMA_FAMILY}' version (a b2d episode)", version)
-    if "time/frame_index" not in reader:
+    if "time/frame_index" not in reader or not isinstance(reader._file.get("time/frame_index"), h5py.Dataset):
         reader.close()
         raise SpecError(path, "time/frame_index", "a dataset [T] (the episode's frames)")
     return reader

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import time
 from pathlib import Path
 
@@ -17,10 +18,11 @@ import mujoco
 import numpy as np
 
 from episodes import schema
-from episodes.atomic import atomic_path, file_sha256
-from episodes.raw import read_raw
-from episodes.h5_concat import concat_frames
+from episodes.atomic import atomic_path, clean_stale_temporaries, file_sha256, guarded_h5, temporary_dir
+from episodes.raw import raw_episode_id, read_raw
+from episodes.h5_concat import concat_frames, copy_in_name_order
 from episodes.render_frames import FrameRenderer
+from episodes.workers import die_with_parent
 from episodes.writer import EpisodeWriter
 from sim import physics
 from sim.errors import SpecError
@@ -48,9 +50,11 @@ def frame_steps(num_steps: int, rate_hz: int) -> np.ndarray:
 
 def replay_to_file(raw_path: Path, out_path: Path, drift_bound_m: float = DEFAULT_DRIFT_BOUND_M) -> dict:
     """Re-simulate a raw recording; frames whose object drift exceeds `drift_bound_m` are flagged."""
+    raw_episode_id(raw_path)            # a foreign file in a folder of recordings is refused
+    clean_stale_temporaries(Path(out_path).parent)
     raw = read_raw(raw_path)
     result = replay(raw, source=raw_path, drift_bound_m=drift_bound_m)
-    with atomic_path(out_path) as tmp, h5py.File(tmp, "w") as f:
+    with atomic_path(out_path) as tmp, guarded_h5(tmp) as f:
         f.attrs.update({"schema": REPLAY_SCHEMA, "task": raw.task, "embodiment": raw.embodiment,
                         "episode_id": raw.episode_id, "seed": raw.seed, "scene_sample": raw.scene_sample,
                         "operator": raw.operator, "raw_sha256": file_sha256(raw_path), "hand_model": raw.hand_model,
@@ -82,6 +86,9 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
 
     Returns frame counts and `seconds`: time per part of the work (summed over workers), which
     `b2d bench replay` reports."""
+    if max_frames is not None and (isinstance(max_frames, bool) or max_frames < 1):
+        raise ValueError(f"max_frames: expected a positive number of frames (or None: all), got {max_frames!r}")
+    clean_stale_temporaries(Path(out_path).parent)
     with h5py.File(replay_path, "r") as src:
         num_steps = src["qpos"].shape[0]
     steps = frame_steps(num_steps, profile.rate_hz)[:max_frames]
@@ -137,17 +144,21 @@ def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, 
 
 def _render_parts(replay_path: Path, profile: SensorProfile, parts: list[np.ndarray], out_path: Path) -> dict:
     import multiprocessing
-    import tempfile
+    import shutil
     from concurrent.futures import ProcessPoolExecutor
 
-    with tempfile.TemporaryDirectory(dir=out_path.parent if out_path.parent.exists() else None) as tmp:
-        part_paths = [Path(tmp) / f"part{i:03d}.render.h5" for i in range(len(parts))]
+    tmp = temporary_dir(out_path.parent, "render-parts")    # named with the pid: a later run cleans it after a kill
+    try:
+        part_paths = [tmp / f"part{i:03d}.render.h5" for i in range(len(parts))]
         # spawn, not fork: a forked child would inherit the parent's GL context and h5py state
-        with ProcessPoolExecutor(len(parts), mp_context=multiprocessing.get_context("spawn")) as pool:
+        with ProcessPoolExecutor(len(parts), mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
             stats = list(pool.map(_render_steps, [replay_path] * len(parts), [profile] * len(parts),
                                   parts, part_paths))
         t0 = time.perf_counter()
         concat_frames(part_paths, out_path, frame_axis_datasets=("render/frame_steps",))
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     seconds: dict[str, float] = {"join": time.perf_counter() - t0}
     for s in stats:
         for key, value in s["seconds"].items():
@@ -247,11 +258,11 @@ def assemble_episode(replay_path: Path, render_path: Path, profile: SensorProfil
                         frame[f"objects/{name}/{key}"] = rows[f"joint_{key}"][step, columns]
                 writer.append(frame)
             for cam in profile.camera_ids:
-                writer.file.copy(ren[f"cameras/{cam}"], f"cameras/{cam}")
+                copy_in_name_order(ren[f"cameras/{cam}"], writer.file, f"cameras/{cam}")
             if has_tactile:
-                writer.file.copy(ren[schema.TACTILE_ROOT], schema.TACTILE_ROOT)
+                copy_in_name_order(ren[schema.TACTILE_ROOT], writer.file, schema.TACTILE_ROOT)
             if labels:
-                writer.file.copy(ren["labels"], "labels")
+                copy_in_name_order(ren["labels"], writer.file, "labels")
             for key, ds in rep["traces"].items():
                 writer.file.copy(ds, f"metrics/timeseries/{key}")
             writer.file.create_dataset("metrics/timeseries/sim_step", data=np.arange(1, rep["action"].shape[0] + 1))
@@ -289,12 +300,33 @@ def raw_to_episode(raw_path: Path, profile: SensorProfile, out_dir: Path, work_d
     """All three stages for one recording (the `b2d replay` command)."""
     raw_path, out_dir = Path(raw_path), Path(out_dir)
     work = Path(work_dir or out_dir / ".work")
-    stem = raw_path.name.removesuffix(".raw.h5")
+    episode_id = raw_episode_id(raw_path)
+    stem = f"episode_{episode_id}"
+    out_path = out_dir / schema.episode_filename(episode_id)
+    refuse_foreign_episode(out_path, raw_path)      # before the work: the answer does not change
+    clean_stale_temporaries(out_dir)
     replay_path = work / f"{stem}.replay.h5"
     render_path = work / f"{stem}.{profile.content_hash}.render.h5"
     replay_to_file(raw_path, replay_path, drift_bound_m=drift_bound_m)
     render_to_file(replay_path, profile, render_path, max_frames=max_frames, workers=workers)
-    episode_id = stem.removeprefix("episode_")
-    out_path = out_dir / schema.episode_filename(episode_id)
     assemble_episode(replay_path, render_path, profile, out_path)
     return out_path
+
+
+def refuse_foreign_episode(out_path: Path, raw_path: Path) -> None:
+    """An episode already at `out_path` is replaced only when it was made from the same recording
+    (same raw sha256: a re-run). Two raw files of the same name from different folders replayed into
+    one folder overwrote each other silently (issue 23)."""
+    if not out_path.exists():
+        return
+    try:
+        with h5py.File(out_path, "r") as f:
+            made_from = json.loads(f["meta/dataset"][()]).get("raw_sha256")
+    except Exception as exc:
+        raise SpecError(out_path, "<file>", "no file, or an episode of this recording (it is replaced); this one "
+                                            f"cannot be read ({type(exc).__name__}): move it away or choose another "
+                                            "output folder") from None
+    if made_from != file_sha256(raw_path):
+        raise SpecError(out_path, "meta/dataset", f"no file, or an episode of {raw_path} (it is replaced); this one "
+                                                  "was made from another recording of the same name: choose "
+                                                  "another output folder or remove it")

@@ -1,4 +1,5 @@
-"""Check an HDF5 episode against the schema; report every missing or malformed node."""
+"""Check an HDF5 episode: the schema (every missing or malformed node), a full decode and the manifest's
+checksums (episodes/integrity.py)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ import h5py
 import hdf5plugin  # noqa: F401  (registers the image filters: a file is checked by reading it)
 import numpy as np
 
-from episodes import schema
+from episodes import integrity, schema
+from episodes.atomic import file_sha256
+from sim.errors import SpecError
 
 _KIND = {"uint8": "u", "uint16": "u", "float32": "f", "float64": "f", "int64": "i", "bool": "b", "str": "O"}
 
@@ -48,49 +51,102 @@ def _check_node(f: h5py.File, base: str, node: schema.Node, dims: dict, problems
             dims[want] = got
 
 
-def validate_episode(path: str | Path) -> list[str]:
-    """Return the list of problems (empty when the episode matches the schema)."""
+def validate_episode(path: str | Path, decode: bool = True, manifest: bool = True) -> list[str]:
+    """Return the list of problems (empty when the episode is intact and matches the schema): the
+    schema, then (`decode`) every dataset read whole, then (`manifest`) the file's sha256 and its
+    datasets' digests against the `episode_manifest.json` beside it, when there is one."""
     path = Path(path)
+    if not path.is_file():
+        return ["<file>: no such file"]
     try:
         f = h5py.File(path, "r")
     except OSError as exc:
-        return [f"{path}: not a readable HDF5 file ({exc})"]
+        return [f"<file>: not a readable HDF5 file ({integrity.short_error(exc)})"]
     problems: list[str] = []
     with f:
-        version = f.attrs.get("schema_version")
-        if version != schema.SCHEMA_VERSION:
-            problems.append(f"/: schema_version {version!r}, expected {schema.SCHEMA_VERSION!r}")
-        dims: dict = {}
-        for node in schema.EPISODE_NODES:
-            _check_node(f, "", node, dims, problems)
-        modalities = _modalities(f, problems)
-        cameras = list(f["cameras"].keys()) if "cameras" in f else []
-        if ("rgb" in modalities or "depth" in modalities) and not cameras:
-            problems.append("cameras/: missing although meta/modalities lists camera modalities")
-        for cam in cameras:
-            cam_dims = dict(dims)
-            for node in schema.CAMERA_NODES:
-                if node.modality in ("rgb", "depth") and node.modality not in modalities:
-                    continue
-                _check_node(f, f"cameras/{cam}/", node, cam_dims, problems)
-        _check_tactile(f, dims, modalities, problems)
-        _check_labels(f, dims, modalities, cameras, problems)
-        for obj in (list(f["objects"].keys()) if "objects" in f else []):
-            obj_dims = dict(dims)
-            for node in schema.OBJECT_NODES:
-                _check_node(f, f"objects/{obj}/", node, obj_dims, problems)
-            articulated = any(f"objects/{obj}/{n.path}" in f for n in schema.OBJECT_JOINT_NODES)
-            for node in schema.OBJECT_JOINT_NODES if articulated else ():
-                _check_node(f, f"objects/{obj}/", node, obj_dims, problems)
-        if "metrics/episode" in f:
+        for check, wanted in ((_check_schema, True), (_check_decode, decode), (_check_manifest, manifest)):
+            if not wanted:
+                continue
             try:
-                json.loads(f["metrics/episode"][()])
-            except (ValueError, TypeError):
-                problems.append("metrics/episode: expected a JSON document")
-        for name, ds in (f["metrics/timeseries"].items() if "metrics/timeseries" in f else []):
-            if not isinstance(ds, h5py.Dataset):
-                problems.append(f"metrics/timeseries/{name}: expected a dataset")
+                check(path, f, problems)
+            except Exception as exc:      # corrupt metadata can fail anywhere: one line, not a traceback
+                problems.append(f"<file>: cannot be read ({integrity.short_error(exc)}): the file is corrupt")
     return problems
+
+
+def _check_decode(path: Path, f: h5py.File, problems: list[str]) -> None:
+    problems += integrity.decode_problems(f)
+
+
+def _check_manifest(path: Path, f: h5py.File, problems: list[str]) -> None:
+    from episodes.manifest import read_manifest     # the manifest module reads episodes with the reader
+
+    source = schema.MANIFEST_NAME
+    try:
+        entries = read_manifest(path.parent)
+    except SpecError as exc:
+        problems.append(f"{source}: {exc}")
+        return
+    if not entries:
+        return
+    entry = entries.get(path.name)
+    if entry is None:
+        problems.append(f"<file>: not listed in {path.parent / source} (not written there by b2d)")
+        return
+    if entry.get("bytes") == path.stat().st_size and entry.get("sha256") == file_sha256(path):
+        return
+    problems.append(f"<file>: sha256 or size differs from {source} (the file changed after it was written)")
+    if isinstance(entry.get("datasets"), dict):
+        changed = integrity.compare_digests(entry["datasets"], integrity.dataset_digests(f), source)
+        problems += changed or ["<file>: the datasets' data is as written: HDF5 structure bytes changed"]
+
+
+def _check_schema(path: Path, f: h5py.File, problems: list[str]) -> None:
+    version = f.attrs.get("schema_version")
+    if version != schema.SCHEMA_VERSION:
+        problems.append(f"/: schema_version {version!r}, expected {schema.SCHEMA_VERSION!r}")
+    dims: dict = {}
+    for node in schema.EPISODE_NODES:
+        _check_node(f, "", node, dims, problems)
+    modalities = _modalities(f, problems)
+    cameras = list(f["cameras"].keys()) if "cameras" in f else []
+    if ("rgb" in modalities or "depth" in modalities) and not cameras:
+        problems.append("cameras/: missing although meta/modalities lists camera modalities")
+    for cam in cameras:
+        cam_dims = dict(dims)
+        for node in schema.CAMERA_NODES:
+            if node.modality in ("rgb", "depth") and node.modality not in modalities:
+                continue
+            _check_node(f, f"cameras/{cam}/", node, cam_dims, problems)
+    _check_tactile(f, dims, modalities, problems)
+    _check_labels(f, dims, modalities, cameras, problems)
+    for obj in _scene_objects(f):       # a deleted object group read "ok" before (issue 23)
+        if f"objects/{obj}" not in f:
+            problems.append(f"objects/{obj}: missing (meta/scene places the object '{obj}')")
+    for obj in (list(f["objects"].keys()) if "objects" in f else []):
+        obj_dims = dict(dims)
+        for node in schema.OBJECT_NODES:
+            _check_node(f, f"objects/{obj}/", node, obj_dims, problems)
+        articulated = any(f"objects/{obj}/{n.path}" in f for n in schema.OBJECT_JOINT_NODES)
+        for node in schema.OBJECT_JOINT_NODES if articulated else ():
+            _check_node(f, f"objects/{obj}/", node, obj_dims, problems)
+    if "metrics/episode" in f:
+        try:
+            json.loads(f["metrics/episode"][()])
+        except (ValueError, TypeError):
+            problems.append("metrics/episode: expected a JSON document")
+    for name, ds in (f["metrics/timeseries"].items() if "metrics/timeseries" in f else []):
+        if not isinstance(ds, h5py.Dataset):
+            problems.append(f"metrics/timeseries/{name}: expected a dataset")
+
+
+def _scene_objects(f: h5py.File) -> list[str]:
+    """The task objects meta/scene places ([] when it is absent or malformed: reported elsewhere)."""
+    try:
+        poses = json.loads(f["meta/scene"][()]).get("object_poses")
+    except (KeyError, ValueError, TypeError, AttributeError):
+        return []
+    return sorted(poses) if isinstance(poses, dict) else []
 
 
 def _modalities(f: h5py.File, problems: list[str]) -> list[str]:

@@ -16,7 +16,7 @@ import hdf5plugin  # registers the image filters (image_filter)
 import numpy as np
 
 from episodes import schema
-from episodes.atomic import atomic_path
+from episodes.atomic import WriteGuard, atomic_path
 
 # Blosc splits a chunk among threads and the compressed bytes then depend on the thread count
 # (BLOSC_NTHREADS=4 gave three different files in three runs); one thread keeps files byte-identical.
@@ -62,7 +62,9 @@ class EpisodeWriter:
 
     def __enter__(self) -> "EpisodeWriter":
         tmp = self._atomic.__enter__()
-        self._file = h5py.File(tmp, "w")
+        # through a WriteGuard: a full disk is an OSError on closing, not a crash of HDF5 (issue 23)
+        self._guard = WriteGuard(tmp)
+        self._file = h5py.File(self._guard, "w")
         self._file.attrs["schema_version"] = schema.SCHEMA_VERSION
         for key, value in self.static.items():
             self._write_static(key, value)
@@ -78,7 +80,7 @@ class EpisodeWriter:
         else:
             value = np.asarray(value)
             # large static arrays (tactile surface maps) compress like per-frame images; scalars cannot
-            packed = image_filter(value.dtype) if value.size >= 1024 else {}
+            packed = {**image_filter(value.dtype), "fletcher32": True} if value.size >= 1024 else {}
             self._file.create_dataset(key, data=value, **packed)
 
     def append(self, frame: dict) -> None:
@@ -115,6 +117,9 @@ class EpisodeWriter:
             kwargs = image_filter(value.dtype)
         else:
             kwargs = {"compression": "gzip", "compression_opts": 4, "shuffle": value.dtype.kind == "f"}
+        # a checksum of each stored chunk: HDF5 refuses to read a chunk whose bytes changed. Zstd and
+        # LZ4 decode most flipped bytes without noticing (issue 23); this costs little (compressed bytes)
+        kwargs["fletcher32"] = True
         frames = schema.IMAGE_CHUNK_FRAMES if image_like else 256
         if frames == 1:     # each chunk is written whole, once, and never read back: a cache only adds a copy
             kwargs["dapl"] = _no_chunk_cache()
@@ -167,7 +172,10 @@ class EpisodeWriter:
                     self._write_small()
             finally:
                 self._datasets.clear()
-                self._file.close()
+                try:
+                    self._file.close()
+                finally:
+                    self._guard.close()     # raises a write error it kept (disk full)
         except BaseException as err:        # finishing failed: the temporary file goes, nothing is renamed
             self._atomic.__exit__(type(err), err, err.__traceback__)
             raise

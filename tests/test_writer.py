@@ -80,8 +80,9 @@ def test_images_use_the_plugin_codecs_and_a_join_keeps_them_chunk_for_chunk(tmp_
                 w.append(frame)
     concat_frames([tmp_path / "a.h5", tmp_path / "b.h5"], tmp_path / "joined.h5")
     with h5py.File(tmp_path / "a.h5") as a, h5py.File(tmp_path / "joined.h5") as f:
-        assert _pipeline(f["rgb"]) == _pipeline(f["mask"]) == [hdf5plugin.ZSTD_ID]
-        assert _pipeline(f["depth"]) == [hdf5plugin.BLOSC_ID]
+        # then HDF5's Fletcher-32 checksum of the stored chunk (issue 23: flipped bytes are refused on reading)
+        assert _pipeline(f["rgb"]) == _pipeline(f["mask"]) == [hdf5plugin.ZSTD_ID, h5py.h5z.FILTER_FLETCHER32]
+        assert _pipeline(f["depth"]) == [hdf5plugin.BLOSC_ID, h5py.h5z.FILTER_FLETCHER32]
         for key in ("rgb", "depth", "mask"):
             assert _pipeline(f[key]) == _pipeline(a[key]) and f[key].chunks == a[key].chunks
             np.testing.assert_array_equal(f[key][()], np.stack([fr[key] for fr in frames]))

@@ -42,8 +42,16 @@ class PacketError(ValueError):
 def _numbers(value, n: int, field: str) -> np.ndarray:
     if not isinstance(value, list) or len(value) != n or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):   # JSON true is no number
-        raise PacketError(f"field '{field}': expected a list of {n} numbers, got {value!r}")
-    return np.asarray(value, float)
+        raise PacketError(f"field '{field}': expected a list of {n} numbers, got {_short(value)}")
+    try:
+        return np.asarray(value, float)
+    except OverflowError:       # an integer beyond float range (1e400 as a float literal reads as inf)
+        raise PacketError(f"field '{field}': expected numbers within float range, got {_short(value)}") from None
+
+
+def _short(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 80 else text[:77] + "..."
 
 
 def parse_packet(payload: bytes) -> tuple[int, dict[str, tuple[np.ndarray, np.ndarray, bool]]]:
@@ -51,23 +59,25 @@ def parse_packet(payload: bytes) -> tuple[int, dict[str, tuple[np.ndarray, np.nd
     (the sanitizer flags them); anything structurally wrong raises PacketError."""
     try:
         data = json.loads(payload.decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise PacketError(f"not UTF-8 JSON: {exc}") from None
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
+        # ValueError: JSON syntax, or an integer of more than 4300 digits; RecursionError: deep nesting
+        raise PacketError(f"not UTF-8 JSON: {type(exc).__name__}: {str(exc)[:80]}") from None
     if not isinstance(data, dict):
         raise PacketError(f"expected a JSON object, got {type(data).__name__}")
     t_ns = data.get("t_ns")
-    if not isinstance(t_ns, int) or isinstance(t_ns, bool):
-        raise PacketError(f"field 't_ns': expected an integer timestamp in nanoseconds, got {t_ns!r}")
+    if not isinstance(t_ns, int) or isinstance(t_ns, bool) or not 0 <= t_ns < 2**63:
+        raise PacketError(f"field 't_ns': expected an integer timestamp in nanoseconds (0 to 2^63-1), "
+                          f"got {_short(t_ns)}")
     hands = {}
     for side in SIDES:
         if side not in data:
             continue
         h = data[side]
         if not isinstance(h, dict):
-            raise PacketError(f"field '{side}': expected an object with 'pos' and 'quat_wxyz', got {h!r}")
+            raise PacketError(f"field '{side}': expected an object with 'pos' and 'quat_wxyz', got {_short(h)}")
         tracked = h.get("tracked", True)
         if not isinstance(tracked, bool):
-            raise PacketError(f"field '{side}.tracked': expected true or false, got {tracked!r}")
+            raise PacketError(f"field '{side}.tracked': expected true or false, got {_short(tracked)}")
         hands[side] = (_numbers(h.get("pos"), 3, f"{side}.pos"), _numbers(h.get("quat_wxyz"), 4, f"{side}.quat_wxyz"),
                        tracked)
     if not hands:

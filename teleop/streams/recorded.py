@@ -77,7 +77,9 @@ def read_stream(path: str | os.PathLike) -> list[OperatorFrame]:
         try:
             return npz[key]
         except ValueError as exc:      # e.g. an object array, which would need unpickling
-            fail(key, f"unreadable without pickle ({exc})")
+            fail(key, f"unreadable without pickle or malformed ({exc})")
+        except Exception as exc:     # a damaged entry: zip, zlib, or a .npy header numpy cannot parse (SyntaxError)
+            fail(key, f"unreadable entry ({type(exc).__name__}: {str(exc)[:120]})")
 
     with npz:
         for key, expected in (("format", FORMAT), ("version", VERSION), ("keypoint_frame", "wrist")):
@@ -91,7 +93,7 @@ def read_stream(path: str | os.PathLike) -> list[OperatorFrame]:
             if name not in npz.files:
                 fail(name, f"missing (expected an array of shape (T, {', '.join(map(str, shape))}))")
             a = get(name)
-            if a.dtype.kind != kind or a.shape[1:] != shape:
+            if a.dtype.kind != kind or a.ndim != 1 + len(shape) or a.shape[1:] != shape:
                 fail(name, f"expected dtype kind {kind!r} and shape (T, {', '.join(map(str, shape))}), "
                            f"got {a.dtype} {a.shape}")
             arrays[name] = a

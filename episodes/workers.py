@@ -1,0 +1,39 @@
+"""Worker processes that do not outlive the process that started them.
+
+A parallel render's workers kept rendering after their parent was killed (issue 23). On Linux the
+kernel sends a signal to a process whose parent dies, once it asks with prctl(PR_SET_PDEATHSIG);
+elsewhere a daemon thread polls the parent's pid.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import sys
+import threading
+import time
+
+PR_SET_PDEATHSIG = 1
+POLL_S = 1.0
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Pool initializer: end this process (SIGKILL) when `parent_pid` ends."""
+    if sys.platform.startswith("linux"):
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) != 0:
+            _watch(parent_pid)
+    else:
+        _watch(parent_pid)
+    if os.getppid() != parent_pid:      # the parent went before the request was made
+        os._exit(1)
+
+
+def _watch(parent_pid: int) -> None:
+    def poll() -> None:
+        while os.getppid() == parent_pid:
+            time.sleep(POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=poll, name="die-with-parent", daemon=True).start()
