@@ -77,15 +77,22 @@ def train(setting, policy_name, config_name, out_dir, episode_paths, steps) -> N
 
 
 @click.command("eval")
-@click.option("--checkpoint", "checkpoint_dir", required=True, type=click.Path(path_type=Path))
+@click.option("--checkpoint", "checkpoint_dir", default=None, type=click.Path(path_type=Path))
+@click.option("--remote", default=None, help="Evaluate a running policy server instead: tcp://HOST:PORT or ws://HOST:PORT.")
+@click.option("--spec", "spec_file", default=None, type=click.Path(path_type=Path),
+              help="--remote: the server's policy spec (JSON/YAML), for servers that do not send it.")
+@click.option("--setting", default=None, help="--remote: <task>__<embodiment>, for servers that do not name it.")
+@click.option("--layout", "layout_file", default=None, type=click.Path(path_type=Path),
+              help="--remote: the fixed-width layout the server speaks (YAML from `b2d layout`).")
 @click.option("--channel", "channels", multiple=True, help="Channel(s); default: all four.")
 @click.option("--episodes", default=10, show_default=True, type=click.IntRange(min=1), help="Rollouts per channel.")
 @click.option("--max-steps", default=None, type=click.IntRange(min=1), help="Cap on control steps per episode.")
 @click.option("--out", "out_file", default=None, type=click.Path(path_type=Path),
               help="Write the per-episode records (parquet) here.")
 @click.option("--json", "as_json", is_flag=True, help="Print the per-channel metrics as JSON.")
-def eval_cmd(checkpoint_dir, channels, episodes, max_steps, out_file, as_json) -> None:
-    """Evaluate a checkpoint in closed loop under generalization channels, anchored on its training scenes."""
+def eval_cmd(checkpoint_dir, remote, spec_file, setting, layout_file, channels, episodes, max_steps, out_file, as_json) -> None:
+    """Evaluate a checkpoint (or a policy server) in closed loop under generalization channels, anchored on
+    its training scenes."""
     import pandas as pd
 
     from evaluation.metrics import cell_metrics
@@ -96,15 +103,25 @@ def eval_cmd(checkpoint_dir, channels, episodes, max_steps, out_file, as_json) -
 
     for c in channels:
         registry.validate_name("channel", c)
-    policy = LearnedPolicy(checkpoint_dir)
-    ckpt = policy.checkpoint
-    anchors = checkpoint_anchors(ckpt.manifest)
+    if (checkpoint_dir is None) == (remote is None):
+        raise click.UsageError("pass --checkpoint DIR or --remote URL")
+    if remote:
+        from policies.interface import PolicyError
+        from policies.remote.target import remote_target
+        try:
+            policy, task, embodiment, anchors = remote_target(remote, spec_file, setting, layout_file)
+        except (PolicyError, ValueError) as exc:
+            raise click.UsageError(str(exc)) from exc
+    else:
+        policy = LearnedPolicy(checkpoint_dir)
+        task, embodiment, anchors = policy.checkpoint.task, policy.checkpoint.embodiment, \
+            checkpoint_anchors(policy.checkpoint.manifest)
     rows = []
     chans = list(channels) or registry.channel_names()
-    with click.progressbar(length=episodes * len(chans), label=f"evaluating {policy.name} on {ckpt.task}",
+    with click.progressbar(length=episodes * len(chans), label=f"evaluating {policy.name} on {task}",
                            file=sys.stderr, show_eta=True) as bar:
         for c in chans:
-            rows += run_rollouts(policy, ckpt.task, ckpt.embodiment, c, anchors, episodes, max_steps=max_steps,
+            rows += run_rollouts(policy, task, embodiment, c, anchors, episodes, max_steps=max_steps,
                                  progress=bar.update)
     frame = records_frame(rows)
     if out_file:
