@@ -1,0 +1,102 @@
+"""Benchmark of the scale-out path on this host: how long Debian's PostgreSQL and redis-server take to start
+(through deploy/*.sh), how long two Celery workers take to answer, and the wall time of one partition of the
+probe graph (b2d_pipeline/scale_out/probe.py: 4 steps of 0.3 s, two of them side by side) through the
+celery executor against the in-process and multiprocess executors, all on the same Postgres instance.
+
+    .venv/bin/python deploy/bench_scale_out.py [--repeats 3]
+
+Everything lives in a temporary folder on free ports and is stopped and removed at the end."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import socket
+import statistics
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import dagster as dg
+
+from b2d_pipeline.scale_out import write_postgres_instance_yaml
+from b2d_pipeline.scale_out.local_workers import LocalWorkers
+from b2d_pipeline.scale_out.probe import STEP_SECONDS, celery_probe_job, in_process_probe_job, multiprocess_probe_job
+
+DEPLOY = Path(__file__).resolve().parent
+JOBS = {"in_process": in_process_probe_job, "multiprocess": multiprocess_probe_job, "celery": celery_probe_job}
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def timed_script(script: str, action: str, env: dict) -> float:
+    started = time.perf_counter()
+    subprocess.run([str(DEPLOY / script), action], env=env, check=True, capture_output=True)
+    return time.perf_counter() - started
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    root = Path(tempfile.mkdtemp(prefix="b2d-bench-", dir="/tmp"))
+    root.chmod(0o755)                  # as root, postgres runs as user postgres and must reach its folder
+    env = {**os.environ, "B2D_SERVICES_DIR": str(root), "B2D_PG_PORT": str(free_port()),
+           "B2D_REDIS_PORT": str(free_port())}
+    figures = {}
+    try:
+        figures["postgres first start (initdb + start)"] = timed_script("postgres.sh", "start", env)
+        timed_script("postgres.sh", "stop", env)
+        figures["postgres start (existing data)"] = timed_script("postgres.sh", "start", env)
+        figures["redis start"] = timed_script("redis.sh", "start", env)
+        url = subprocess.run([str(DEPLOY / "postgres.sh"), "url"], env=env, check=True, capture_output=True,
+                             text=True).stdout.strip()
+        redis = subprocess.run([str(DEPLOY / "redis.sh"), "url"], env=env, check=True, capture_output=True,
+                               text=True).stdout.strip()
+        home = root / "dagster_home"
+        write_postgres_instance_yaml(home, url)
+        started = time.perf_counter()
+        dg.DagsterInstance.from_config(str(home)).dispose()
+        figures["dagster schema on a new database"] = time.perf_counter() - started
+        os.environ.update(DAGSTER_HOME=str(home), B2D_CELERY_BROKER=f"{redis}/0", B2D_CELERY_BACKEND=f"{redis}/1")
+        started = time.perf_counter()
+        with LocalWorkers(["w1", "w2"], dict(os.environ), root, preload=("b2d_pipeline.scale_out.probe",)) as workers:
+            workers.wait_ready(f"{redis}/0")
+            figures["two celery workers ready"] = time.perf_counter() - started
+            for name, _ in figures.items():
+                print(f"{name:42s} {figures[name]:6.2f} s")
+            walls = run_probe(home, args.repeats)
+    finally:
+        for script in ("redis.sh", "postgres.sh"):
+            subprocess.run([str(DEPLOY / script), "stop"], env=env, capture_output=True)
+        shutil.rmtree(root, ignore_errors=True)
+    print(f"\nprobe partition (4 steps x {STEP_SECONDS} s; critical path {3 * STEP_SECONDS:.1f} s), "
+          f"{args.repeats} runs each, instance on Postgres:")
+    base = statistics.median(walls["in_process"])
+    for name, runs in walls.items():
+        median = statistics.median(runs)
+        print(f"  {name:13s} median {median:6.2f} s  ({' '.join(f'{w:.2f}' for w in runs)})  "
+              f"x{median / base:.2f} of in_process")
+
+
+def run_probe(home: Path, repeats: int) -> dict[str, list[float]]:
+    walls = {name: [] for name in JOBS}
+    with dg.DagsterInstance.from_config(str(home)) as instance:
+        for i in range(repeats):
+            for name, job in JOBS.items():     # interleaved, so load on the shared machine hits all alike
+                started = time.perf_counter()
+                result = dg.execute_job(dg.reconstructable(job), instance, tags={"dagster/partition": f"p{i % 2}"},
+                                        run_config={"loggers": {"console": {"config": {"log_level": "ERROR"}}}})
+                walls[name].append(time.perf_counter() - started)
+                assert result.success, name
+    return walls
+
+
+if __name__ == "__main__":
+    main()

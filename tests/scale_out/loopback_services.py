@@ -1,0 +1,24 @@
+"""Helpers for the scale-out tests (a module of its own: `conftest` is a name every test folder uses)."""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+DEPLOY = REPO / "deploy"
+NEEDS_POSTGRES = "Debian's PostgreSQL is not installed (apt-get install postgresql)"
+NEEDS_REDIS = "Debian's redis-server is not installed (apt-get install redis-server)"
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def run_script(script: str, action: str, env: dict[str, str]) -> subprocess.CompletedProcess:
+    return subprocess.run([str(DEPLOY / script), action], env={**os.environ, **env}, capture_output=True,
+                          text=True, timeout=120)
