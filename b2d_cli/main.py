@@ -10,8 +10,12 @@ from pathlib import Path
 
 import click
 
+from b2d_cli import errors as cli_errors
 from b2d_cli.media_cmd import export, show
+from b2d_cli.lerobot_cmd import lerobot as lerobot_export_cmd
 from b2d_cli.policy_cmd import eval_cmd, train
+from b2d_cli.tables_cmd import tables
+from b2d_cli.serve_cmd import layout, serve
 from b2d_cli.tactile_cmd import tactile
 from b2d_cli.tasks_cmd import tasks
 from b2d_cli.teleop_cmd import teleop
@@ -25,13 +29,20 @@ def _fail(message: str) -> None:
 
 
 class _Group(click.Group):
-    """Turn the project's validation errors into one clear line and exit code 2."""
+    """Turn any error into one clear line: exit code 2 for bad input, 1 for other faults (b2d_cli/errors.py)."""
 
     def invoke(self, ctx):
         try:
             return super().invoke(ctx)
         except (SpecError, UnknownNameError) as exc:
             _fail(str(exc))
+        except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
+            raise
+        except Exception as exc:
+            if cli_errors.show_traceback():
+                raise
+            click.echo(f"error: {cli_errors.one_line(exc)}", err=True)
+            cli_errors.leave(cli_errors.exit_code(exc), [exc])
 
 
 @click.group(cls=_Group)
@@ -109,7 +120,7 @@ def list_cmd(kind: str, as_json: bool) -> None:
 @click.option("--episodes", default=1, show_default=True, type=click.IntRange(min=1))
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
 @click.option("--first-index", default=0, show_default=True, help="Index of the first episode (sets its seed).")
-@click.option("--max-steps", default=None, type=int, help="Cap each episode's control steps.")
+@click.option("--max-steps", default=None, type=click.IntRange(min=1), help="Cap each episode's control steps.")
 @click.option("--operator", type=click.Choice(["stream", "scripted"]), default="stream", show_default=True,
               help="stream: the script plays the person through the teleop stream (keypoints + wrist poses -> "
                    "DexPilot + arm IK); scripted: the same plan commands the joints directly (baseline).")
@@ -117,23 +128,29 @@ def record(task, embodiment, episodes, out_dir, first_index, max_steps, operator
     """Record raw demonstrations with the scripted operator."""
     from teleop.demos import record_demonstrations
 
+    from episodes.atomic import clean_stale_temporaries
+
     registry.validate_name("task", task)
     registry.validate_name("embodiment", embodiment)
+    clean_stale_temporaries(out_dir)
     with click.progressbar(length=episodes, label=f"recording {task} on {embodiment}", file=sys.stderr) as bar:
         results = record_demonstrations(task, embodiment, episodes, out_dir, max_steps=max_steps,
                                         first_index=first_index, progress=bar.update, operator=operator)
     for r in results:
         status = "error: " + r.error if r.error else ("success" if r.success else "no success")
         click.echo(f"{r.episode_id}  steps={r.steps:<5} {status}  {r.path or ''}")
-    if any(r.error for r in results):
+    failed = [r for r in results if r.error]
+    if failed:
+        click.echo(f"{len(failed)} of {len(results)} episodes failed: {', '.join(r.episode_id for r in failed)}",
+                   err=True)
         sys.exit(1)
 
 
 @cli.command()
-@click.argument("raw", nargs=-1, required=True, type=click.Path(exists=True, path_type=Path))
+@click.argument("raw", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--profile", default="preview", show_default=True)
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
-@click.option("--max-frames", default=None, type=int, help="Render at most this many frames per episode.")
+@click.option("--max-frames", default=None, type=click.IntRange(min=1), help="Render at most this many frames per episode.")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
               help="Processes rendering each episode's frames (same arrays for any count).")
 @click.option("--drift-bound-m", default=0.005, show_default=True, type=click.FloatRange(min=0.0),
@@ -144,38 +161,46 @@ def replay(raw, profile, out_dir, max_frames, workers, drift_bound_m) -> None:
     from episodes.stages import raw_to_episode
 
     prof = registry.sensor_profile(profile)
-    failures = 0
+    failed, written = [], []
     with click.progressbar(raw, label=f"replaying under '{profile}'", file=sys.stderr) as paths:
         for path in paths:
             try:
                 out = raw_to_episode(path, prof, out_dir, max_frames=max_frames, workers=workers,
                                      drift_bound_m=drift_bound_m)
+                written.append(out)
                 click.echo(f"\n{path} -> {out}", err=True)
-            except (SpecError, UnknownNameError) as exc:   # one bad episode never stops the others
-                failures += 1
-                click.echo(f"\nerror: {exc}", err=True)
-    if Path(out_dir).exists():
-        write_manifest(out_dir)
-    if failures:
-        sys.exit(1)
+            except Exception as exc:   # one bad input never stops the others
+                if cli_errors.show_traceback():
+                    raise
+                failed.append((path, exc))
+                click.echo(f"\nerror: {cli_errors.one_line(exc, path)}", err=True)
+    if written:
+        write_manifest(out_dir, updated=written)
+    cli_errors.report_batch("recordings", len(raw), failed)
 
 
 @cli.command()
 @click.argument("episode", nargs=-1, required=True, type=click.Path(path_type=Path))
 def validate(episode) -> None:
-    """Check HDF5 episodes against the schema; exit 1 when any fails."""
+    """Check HDF5 episodes: the schema, every dataset decoded, and the sha256 and dataset digests the
+    episode_manifest.json beside each file recorded; exit 1 when any fails."""
     from episodes.validate import validate_episode
 
-    bad = 0
+    bad = []
     for path in episode:
-        problems = validate_episode(path)
+        try:
+            problems = validate_episode(path)
+        except Exception as exc:      # a check that fails is a finding about this file, not the end of the batch
+            problems = [f"<file>: {cli_errors.one_line(exc)}"]
         if problems:
-            bad += 1
+            bad.append(path)
             click.echo(f"{path}: INVALID ({len(problems)} problems)")
             for p in problems:
-                click.echo(f"  - {p}")
+                click.echo(f"  - {path}: {p}")
         else:
             click.echo(f"{path}: ok")
+    if bad:
+        click.echo(f"{len(bad)} of {len(episode)} episodes invalid: {', '.join(map(str, bad))}", err=True)
     sys.exit(1 if bad else 0)
 
 
@@ -248,7 +273,7 @@ DEFAULT_SETTING = "citrus_plate_loading__ur5_rh5dg2"     # the foundation settin
 @click.option("--profile", default=None, help="Sensor profile (default: $B2D_PROFILE or preview).")
 @click.option("--episodes", default=None, type=int, help="Demonstrations per setting.")
 @click.option("--eval-episodes", default=None, type=int, help="Rollouts per (setting, channel).")
-@click.option("--max-steps", default=None, type=int, help="Cap on control steps per episode.")
+@click.option("--max-steps", default=None, type=click.IntRange(min=1), help="Cap on control steps per episode.")
 @click.option("--render-workers", default=None, type=click.IntRange(min=1),
               help="Processes rendering each episode (default: $B2D_RENDER_WORKERS or 1).")
 @click.option("--train-steps", default=None, type=click.IntRange(min=1), help="Override the policy config's training steps.")
@@ -259,6 +284,7 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
     from b2d_pipeline.chain import materialize_chain
     from b2d_pipeline.instance import ensure_instance_yaml
     from b2d_pipeline.partitions import setting_keys
+    from b2d_pipeline.scale_out.instance_yaml import require_instance_services
     from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
     overrides = {k: v for k, v in {"profile": profile, "demo_episodes": episodes, "eval_episodes": eval_episodes,
@@ -269,7 +295,9 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
         registry.parse_setting_key(key)
         if key not in setting_keys():    # the partitions hold only settings the operator can record
             raise UnknownNameError("recordable setting", key, setting_keys())
-    ensure_instance_yaml(use_default_dagster_home(settings.data_root))
+    home = use_default_dagster_home(settings.data_root)
+    ensure_instance_yaml(home)
+    require_instance_services(home)       # an instance on Postgres that is down: one line, how to start it
     with dg.DagsterInstance.get() as instance:
         chosen = setting_keys() if all_settings else (list(settings_) or [DEFAULT_SETTING])
         results = materialize_chain(settings, chosen, instance,
@@ -283,12 +311,16 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
 
 
 cli.add_command(export)
+export.add_command(lerobot_export_cmd)
 cli.add_command(show)
 cli.add_command(tactile)
 cli.add_command(tasks)
 cli.add_command(teleop)
 cli.add_command(train)
 cli.add_command(eval_cmd)
+cli.add_command(tables)
+cli.add_command(serve)
+cli.add_command(layout)
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ import dagster as dg
 
 from b2d_pipeline.definitions import build_definitions
 from b2d_pipeline.partitions import setting_channel_key, setting_channel_partitions
+from b2d_pipeline.run_config import job_run_config
 from b2d_pipeline.settings import FactorySettings
 from sim.registry import channel_names
 
@@ -88,7 +89,12 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
     executor = ({"multiprocess": {"max_concurrent": processes, "start_method": {
                     "forkserver": {"preload_modules": ["b2d_pipeline.definitions"]}}}}
                 if processes > 1 else {"in_process": {}})
-    run_config = {**QUIET_LOGS, "execution": {"config": executor}}
+    defs = build_definitions(settings)
+    # another executor (celery, k8s: B2D_EXECUTOR) takes its own config; the default one is sized here
+    execution = {"execution": {"config": executor}} if settings.executor == "default" else {}
+    run_configs = {job: {**QUIET_LOGS, **execution,
+                         "ops": job_run_config(list(defs.resolve_job_def(job).graph.node_dict), settings)}
+                   for job in JOBS}
     plan = run_plan(settings, setting_keys, channels)
     results, failed_settings, started, durations = [], set(), time.perf_counter(), {}
     with _environment(settings.to_env()):
@@ -103,7 +109,7 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                     if isinstance(partition, dg.MultiPartitionKey) else {"dagster/partition": partition} if partition
                     else {})
             t0 = time.perf_counter()
-            result = dg.execute_job(dg.reconstructable(JOBS[job]), instance, run_config=run_config, tags=tags)
+            result = dg.execute_job(dg.reconstructable(JOBS[job]), instance, run_config=run_configs[job], tags=tags)
             durations.setdefault(job, []).append(time.perf_counter() - t0)
             results.append(result)
             if not result.success:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import dagster as dg
 
-PRODUCTION = ["raw_recordings", "replays", "renders", "episodes"]
+# setting_specs first: each production run observes its catalog files, so an edit shows as stale
+PRODUCTION = ["setting_specs", "raw_recordings", "replays", "renders", "episodes"]
 ROLLOUTS = dg.AssetSelection.groups("evaluation") - dg.AssetSelection.assets("evaluation_table")
 
 production_job = dg.define_asset_job(

@@ -1,20 +1,23 @@
-"""When things run: the production job per setting, a nightly re-render of every setting under the
-active profile, and the result table rebuilt automatically when new rollouts land."""
+"""When things run without a person: declarative automation, evaluated by one sensor.
+
+- Renders re-run when their code version changes, which carries the active sensor profile's content
+  hash: switching or editing the profile re-renders every stored replay (no re-simulation), and nothing
+  is re-rendered while the profile stands still (the nightly re-render this replaces ran regardless).
+- Episodes follow their renders; the result table follows new rollouts; the LeRobot export follows
+  its episodes.
+"""
 
 from __future__ import annotations
 
 import dagster as dg
 
-from b2d_pipeline.jobs import rerender_job
-from b2d_pipeline.partitions import settings_partitions
+_AC = dg.AutomationCondition
 
-@dg.schedule(job=rerender_job, cron_schedule="0 2 * * *", default_status=dg.DefaultScheduleStatus.STOPPED)
-def nightly_rerender(context: dg.ScheduleEvaluationContext):
-    # A plain ScheduleDefinition on a partitioned job requests no partition: ask for each one.
-    for key in settings_partitions.get_partition_keys():
-        yield dg.RunRequest(run_key=f"{key}-{context.scheduled_execution_time:%Y%m%d}", partition_key=key)
+RERENDER_ON_PROFILE_CHANGE = (
+    _AC.code_version_changed().since_last_handled() & ~_AC.any_deps_missing() & ~_AC.in_progress()
+).with_label("re-render when the sensor profile changes")
 
+FOLLOW_UPSTREAM = _AC.eager().with_label("follow upstream updates")
 
 automation_sensor = dg.AutomationConditionSensorDefinition(
-    "evaluation_automation", target=dg.AssetSelection.assets("evaluation_table"),
-    default_status=dg.DefaultSensorStatus.RUNNING)
+    "factory_automation", target=dg.AssetSelection.all(), default_status=dg.DefaultSensorStatus.RUNNING)

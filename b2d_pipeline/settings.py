@@ -18,29 +18,30 @@ REPO_ROOT = Path(__file__).resolve().parent.parent
 
 @dataclass(frozen=True)
 class FactorySettings:
+    """What the code location is built from (read from the environment: the data root, the sensor
+    profile, the policies) and the defaults of the run parameters (Dagster config, b2d_pipeline/run_config.py;
+    never read from the environment: `b2d materialize` passes them as run config)."""
+
     data_root: Path
     profile: SensorProfile
-    demo_episodes: int          # raw recordings per setting
-    eval_episodes: int          # rollouts per (setting, channel)
-    max_steps: int | None       # cap on control steps per episode (tests, quick looks)
+    demo_episodes: int = 2      # run config default: raw recordings per setting
+    eval_episodes: int = 1      # run config default: rollouts per (setting, channel)
+    max_steps: int | None = None   # run config default: cap on control steps per episode (tests, quick looks)
     render_workers: int = 1     # processes rendering one episode's frames (same arrays for any count)
     policies: tuple[str, ...] = ("act", "dp")   # learned policies trained and evaluated per setting
     policy_config: str = "tiny"                 # their config (policies/configs/<policy>/<name>.yaml)
-    train_steps: int | None = None              # override the config's training steps (quick runs)
+    train_steps: int | None = None              # run config default: override the config's training steps
+    executor: str = "default"                   # where steps run: b2d_pipeline/scale_out/executors.py
 
     @classmethod
     def from_env(cls, **overrides) -> "FactorySettings":
-        max_steps = os.environ.get("B2D_MAX_STEPS")
         values = dict(
             data_root=Path(os.environ.get("B2D_DATA_ROOT", REPO_ROOT / "data")),
             profile=sensor_profile(os.environ.get("B2D_PROFILE", "preview")),
-            demo_episodes=int(os.environ.get("B2D_DEMO_EPISODES", "2")),
-            eval_episodes=int(os.environ.get("B2D_EVAL_EPISODES", "1")),
-            max_steps=int(max_steps) if max_steps else None,
             render_workers=int(os.environ.get("B2D_RENDER_WORKERS", "1")),
             policies=tuple(p for p in os.environ.get("B2D_POLICIES", "act,dp").split(",") if p),
             policy_config=os.environ.get("B2D_POLICY_CONFIG", "tiny"),
-            train_steps=int(os.environ["B2D_TRAIN_STEPS"]) if os.environ.get("B2D_TRAIN_STEPS") else None,
+            executor=os.environ.get("B2D_EXECUTOR", "default"),
         )
         values.update(overrides)
         if isinstance(values["profile"], str):
@@ -49,14 +50,11 @@ class FactorySettings:
         return cls(**values)
 
     def to_env(self) -> dict[str, str]:
-        """The environment that `from_env` reads these settings back from: how a run's step processes
-        (Dagster's multiprocess executor) rebuild the same definitions."""
-        env = {"B2D_DATA_ROOT": str(self.data_root), "B2D_PROFILE": self.profile.name,
-               "B2D_DEMO_EPISODES": str(self.demo_episodes), "B2D_EVAL_EPISODES": str(self.eval_episodes),
-               "B2D_MAX_STEPS": str(self.max_steps or ""), "B2D_RENDER_WORKERS": str(self.render_workers),
-               "B2D_POLICIES": ",".join(self.policies), "B2D_POLICY_CONFIG": self.policy_config,
-               "B2D_TRAIN_STEPS": str(self.train_steps or "")}
-        return env
+        """The environment that `from_env` reads the code location's settings back from: how a run's step
+        processes (Dagster's multiprocess executor) rebuild the same definitions."""
+        return {"B2D_DATA_ROOT": str(self.data_root), "B2D_PROFILE": self.profile.name,
+                "B2D_RENDER_WORKERS": str(self.render_workers), "B2D_POLICIES": ",".join(self.policies),
+                "B2D_POLICY_CONFIG": self.policy_config, "B2D_EXECUTOR": self.executor}
 
     def policy_configs(self) -> dict:
         """{policy: its PolicyConfig} of the learned policies in use; unknown names fail fast."""

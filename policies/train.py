@@ -94,14 +94,16 @@ def build_model(cfg: PolicyConfig, shapes):
     return entry.model_class(cfg.model_config_object(), shapes)
 
 
-def _lr_lambda(cfg: PolicyConfig):
+def lr_factor(cfg: PolicyConfig, total_steps: int):
+    """The learning-rate multiplier per optimizer step: linear warm-up, then constant or a cosine that
+    reaches zero at ``total_steps`` (the run's budget, which `--steps` may set apart from the config's)."""
     t = cfg.train
 
     def factor(step: int) -> float:
         if step < t.warmup_steps:
             return (step + 1) / t.warmup_steps
         if t.lr_schedule == "cosine":
-            progress = (step - t.warmup_steps) / max(1, t.steps - t.warmup_steps)
+            progress = (step - t.warmup_steps) / max(1, total_steps - t.warmup_steps)
             return 0.5 * (1.0 + np.cos(np.pi * min(1.0, progress)))
         return 1.0
     return factor
@@ -126,7 +128,7 @@ def train_policy(cfg: PolicyConfig, episode_paths: list[Path], out_dir: Path, pr
     model = build_model(cfg, shapes).to(device)
     ema = AveragedModel(model, multi_avg_fn=get_ema_multi_avg_fn(t.ema_decay)) if t.ema_decay else None
     optimizer = torch.optim.AdamW(model.parameters(), lr=t.lr, weight_decay=t.weight_decay)
-    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, _lr_lambda(cfg))
+    schedule = torch.optim.lr_scheduler.LambdaLR(optimizer, lr_factor(cfg, total))
     rng = np.random.default_rng(t.seed)
     views = cfg.observation.views
     train_log, window, started = [], [], time.perf_counter()

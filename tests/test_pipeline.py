@@ -12,8 +12,8 @@ from b2d_pipeline.chain import materialize_chain
 from b2d_pipeline.settings import FactorySettings
 SETTING = "citrus_plate_loading__ur5_rh5dg2"
 
-ASSETS = {"raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint", "dp_checkpoint",
-          "scripted_operator_rollouts", "act_rollouts", "dp_rollouts", "evaluation_table"}
+ASSETS = {"setting_specs", "raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint", "dp_checkpoint",
+          "scripted_operator_rollouts", "act_rollouts", "dp_rollouts", "evaluation_table", "lerobot_dataset"}
 
 
 def test_definitions_load():
@@ -59,11 +59,18 @@ def test_materialize_whole_chain(tmp_path):
 
 def test_a_changed_policy_config_changes_the_checkpoint_code_version(tmp_path):
     tiny = build_definitions(FactorySettings.from_env(data_root=tmp_path))
-    fewer = build_definitions(FactorySettings.from_env(data_root=tmp_path, train_steps=7))
     paper = build_definitions(FactorySettings.from_env(data_root=tmp_path, policy_config="paper"))
     versions = [d.resolve_assets_def("act_checkpoint").code_versions_by_key[dg.AssetKey("act_checkpoint")]
-                for d in (tiny, fewer, paper)]
-    assert len(set(versions)) == 3
+                for d in (tiny, paper)]
+    assert len(set(versions)) == 2
+
+
+def test_run_parameters_are_dagster_config_with_the_settings_as_defaults(tmp_path):
+    d = build_definitions(FactorySettings.from_env(data_root=tmp_path, demo_episodes=3, train_steps=7))
+    fields = d.resolve_job_def("produce_and_train").run_config_schema.config_type.fields["ops"].config_type.fields
+    recording = fields["raw_recordings"].config_type.fields["config"].config_type.fields
+    assert recording["episodes"].default_value == 3 and "max_steps" in recording
+    assert fields["act_checkpoint"].config_type.fields["config"].config_type.fields["steps"].default_value == 7
 
 
 def test_bad_recording_fails_its_partition_and_keeps_the_rest(tmp_path, raw_path):
@@ -118,4 +125,39 @@ def test_the_run_plan_covers_every_policy_and_channel():
     assert {k.to_user_string() for k in jobs["evaluate_policies"].asset_layer.selected_asset_keys} == {
         "scripted_operator_rollouts", "act_rollouts", "dp_rollouts"}
     assert {k.to_user_string() for k in jobs["produce_and_train"].asset_layer.selected_asset_keys} == {
-        "raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint", "dp_checkpoint"}
+        "setting_specs", "raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint",
+        "dp_checkpoint"}
+
+
+def test_an_empty_partition_fails_saying_why(tmp_path):
+    """A setting with no recordings must not turn green with 0 episodes."""
+    d = build_definitions(FactorySettings.from_env(data_root=tmp_path, profile="preview"))
+    with dg.DagsterInstance.ephemeral() as instance:
+        result = dg.materialize(list(d.assets), selection=["replays"], partition_key=SETTING, instance=instance,
+                                resources=d.resources, raise_on_error=False)
+    assert not result.success
+    failure = str(next(e for e in result.all_events if e.is_step_failure).event_specific_data)
+    assert "no *.raw.h5 files in" in failure and SETTING in failure and "raw_recordings" in failure
+
+
+def test_renders_fan_out_one_step_per_replay_and_a_bad_replay_fails_only_itself(tmp_path, raw_path):
+    from episodes.stages import replay_to_file
+
+    settings = FactorySettings.from_env(data_root=tmp_path, profile="preview")
+    replay_dir = tmp_path / "replays" / SETTING
+    replay_to_file(raw_path, replay_dir / "episode_0000.replay.h5")
+    (replay_dir / "episode_0001.replay.h5").write_bytes(b"not an HDF5 file")
+    d = build_definitions(settings)
+    with dg.DagsterInstance.ephemeral() as instance:
+        result = dg.materialize(list(d.assets), selection=["renders"], partition_key=SETTING, instance=instance,
+                                resources=d.resources, raise_on_error=False)
+    steps = {e.step_key for e in result.all_events if e.event_type_value == "STEP_START"}
+    assert steps == {"renders.list_replays", "renders.render_replay[episode_0000]",
+                     "renders.render_replay[episode_0001]", "renders.gather_renders"}
+    failure = str(next(e for e in result.all_events if e.is_step_failure).event_specific_data)
+    assert "episode_0001.replay.h5" in failure and "1 succeeded" in failure
+    render_dir = tmp_path / "renders" / settings.profile.content_hash / SETTING
+    assert [p.name for p in render_dir.glob("*.h5")] == ["episode_0000.render.h5"]
+    # the steps hand each other JSON, never a pickle
+    outputs = list((tmp_path / "step_outputs").rglob("*"))
+    assert any(p.suffix == ".json" for p in outputs) and not any(p.suffix in ("", ".pkl") and p.is_file() for p in outputs)

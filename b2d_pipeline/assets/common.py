@@ -12,6 +12,14 @@ def data_version(described: dict, *extra: str) -> dg.DataVersion:
     return dg.DataVersion(hashlib.sha256(blob.encode()).hexdigest()[:16])
 
 
+def require_inputs(found: list, folder, pattern: str, upstream: str) -> list:
+    """An empty partition is a failure that says why, not a green step with 0 episodes."""
+    if not found:
+        raise dg.Failure(description=f"no {pattern} files in {folder}: materialize {upstream} for this "
+                                     "partition first")
+    return found
+
+
 def fail_if_errors(errors: dict[str, str], done: int) -> None:
     """Every good episode is already written; now fail the partition, naming each bad one."""
     if errors:

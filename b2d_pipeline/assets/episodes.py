@@ -3,9 +3,10 @@
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors
+from b2d_pipeline.assets.common import data_version, fail_if_errors, require_inputs
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
+from b2d_pipeline.schedules import FOLLOW_UPSTREAM
 from b2d_pipeline.settings import FactorySettings
 from episodes import schema
 from episodes.manifest import write_manifest
@@ -17,13 +18,15 @@ def build(settings: FactorySettings):
 
     @dg.asset(partitions_def=settings_partitions, group_name="episodes", deps=["replays", "renders"],
               code_version=f"3-{profile.content_hash}",   # 3: schema b2d.episode/2 (labels, joints, distractors)
+              automation_condition=FOLLOW_UPSTREAM,
               description="Synchronized multimodal episodes (meta, time, action, cameras, robot incl. tactile, "
                           "objects, metrics).")
     def episodes(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key
         out_dir = store.episode_dir(profile.content_hash, key)
         paths, errors, successes = [], {}, 0
-        for ren in sorted(store.render_dir(profile.content_hash, key).glob("*.render.h5")):
+        render_dir = store.render_dir(profile.content_hash, key)
+        for ren in require_inputs(sorted(render_dir.glob("*.render.h5")), render_dir, "*.render.h5", "renders"):
             stem = ren.name.removesuffix(".render.h5")
             rep = store.replay_dir(key) / f"{stem}.replay.h5"
             out = out_dir / schema.episode_filename(stem.removeprefix("episode_"))

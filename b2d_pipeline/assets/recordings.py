@@ -6,19 +6,23 @@ import dagster as dg
 from b2d_pipeline.assets.common import data_version, fail_if_errors
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
+from b2d_pipeline.run_config import recording_config
 from b2d_pipeline.settings import FactorySettings
 from sim.registry import parse_setting_key
 from teleop.demos import record_demonstrations
 
 
 def build(settings: FactorySettings):
-    @dg.asset(partitions_def=settings_partitions, group_name="recordings", code_version="1",
+    RecordingConfig = recording_config(settings)
+
+    @dg.asset(partitions_def=settings_partitions, group_name="recordings", code_version="1", deps=["setting_specs"],
               description="Raw demonstrations: actions, post-step states and evaluator state per step.")
-    def raw_recordings(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
+    def raw_recordings(context: dg.AssetExecutionContext, config: RecordingConfig,
+                       store: EpisodeStore) -> dg.MaterializeResult:
         setting = parse_setting_key(context.partition_key)
         out = store.raw_dir(context.partition_key)
-        results = record_demonstrations(setting.task, setting.embodiment, settings.demo_episodes, out,
-                                        max_steps=settings.max_steps)
+        results = record_demonstrations(setting.task, setting.embodiment, config.episodes, out,
+                                        max_steps=config.max_steps)
         paths = [r.path for r in results if r.path]
         fail_if_errors({r.episode_id: r.error for r in results if r.error}, len(paths))
         described = store.describe(paths)
@@ -26,6 +30,6 @@ def build(settings: FactorySettings):
             metadata={"episodes": len(paths), "successes": sum(r.success for r in results),
                       "steps": [r.steps for r in results], "files": dg.MetadataValue.json(described),
                       "directory": dg.MetadataValue.path(str(out))},
-            data_version=data_version(described))
+            data_version=data_version(described, config.model_dump_json()))
 
     return raw_recordings

@@ -3,7 +3,7 @@
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors
+from b2d_pipeline.assets.common import data_version, fail_if_errors, require_inputs
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
 from episodes.stages import replay_to_file
@@ -16,7 +16,8 @@ def build():
     def replays(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key
         paths, errors, fidelity = [], {}, {}
-        for raw in sorted(store.raw_dir(key).glob("*.raw.h5")):
+        raws = require_inputs(sorted(store.raw_dir(key).glob("*.raw.h5")), store.raw_dir(key), "*.raw.h5", "raw_recordings")
+        for raw in raws:
             out = store.replay_dir(key) / raw.name.replace(".raw.h5", ".replay.h5")
             try:
                 info = replay_to_file(raw, out)

@@ -7,6 +7,7 @@ import dagster as dg
 from b2d_pipeline.assets.common import data_version, fail_if_errors
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
+from b2d_pipeline.run_config import training_config
 from b2d_pipeline.settings import FactorySettings
 from episodes.atomic import file_sha256
 from policies.checkpoint import LOSS_PLOT, MANIFEST, WEIGHTS
@@ -52,20 +53,22 @@ def build_policy_inputs(settings: FactorySettings):
 def build_checkpoint(settings: FactorySettings, policy: str):
     cfg = settings.policy_configs()[policy]
     profile = sensor_profile(cfg.observation.sensor_profile)
-    steps = settings.train_steps or cfg.train.steps
+    TrainingConfig = training_config(settings)
 
-    # the config's content hash and the step count: a changed config marks the checkpoint (and rollouts) stale
+    # the config's content hash: a changed config marks the checkpoint (and rollouts) stale; the step
+    # budget is run config, recorded in the checkpoint's manifest and so in its data version
     @dg.asset(name=f"{policy}_checkpoint", partitions_def=settings_partitions, group_name="training",
-              deps=["policy_inputs"], code_version=f"1-{cfg.content_hash}-{steps}",
+              deps=["policy_inputs"], code_version=f"1-{cfg.content_hash}",
               description=f"{policy.upper()} ({cfg.name} config: {cfg.description}) trained on the setting's "
                           f"episodes under '{profile.name}'. Safetensors + JSON.")
-    def checkpoint(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
+    def checkpoint(context: dg.AssetExecutionContext, config: TrainingConfig,
+                   store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key
         episodes = sorted(store.episode_dir(profile.content_hash, key).glob("episode_*.hdf5"))
         if not episodes:
             raise dg.Failure(f"no episodes of {key} under '{profile.name}': materialize policy_inputs first")
         out = store.checkpoint_dir(policy, cfg.name, key)
-        result = train_policy(cfg, episodes, out, steps=steps)
+        result = train_policy(cfg, episodes, out, steps=config.steps or cfg.train.steps)
         curve = [{"step": r["step"], "loss": round(r["loss"], 5)} for r in result.train_log]
         return dg.MaterializeResult(
             metadata={"episodes": result.episodes, "frames": result.frames, "steps": result.steps,

@@ -211,3 +211,17 @@ def test_the_closed_loop_renders_exactly_the_training_images(policy_episodes, ac
                 assert frame["images"][v][-1].tobytes() == stored[v][k].tobytes(), (v, k)
     finally:
         source.close()
+
+
+def test_the_cosine_schedule_spans_the_run_budget_not_the_config_steps():
+    # `b2d train --steps N` sets the budget apart from the config's; the cosine must reach zero at N,
+    # not at the config's step count (it did: DP trained 100 steps, then 3,900 at a learning rate of 0)
+    from policies.train import lr_factor
+
+    cfg = load_policy_config("dp", "tiny")
+    assert cfg.train.lr_schedule == "cosine" and cfg.train.steps == 100
+    factor = lr_factor(cfg, 4000)
+    assert factor(cfg.train.warmup_steps) == pytest.approx(1.0)
+    assert factor(2000) == pytest.approx(0.5, abs=0.01)
+    assert factor(3000) > 0.1
+    assert factor(4000) == pytest.approx(0.0, abs=1e-9)
