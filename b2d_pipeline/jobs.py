@@ -32,4 +32,8 @@ rerender_job = dg.define_asset_job(
     "rerender_episodes", selection=["renders", "episodes"],
     description="Re-render stored replays under the active sensor profile (no re-simulation).")
 
-ALL = [production_job, training_job, produce_and_train_job, evaluation_job, table_job, rerender_job]
+teleop_job = dg.define_asset_job(
+    "ingest_teleop", selection=["teleop_episodes"],
+    description="A live teleoperation recording to its HDF5 episode (one dynamic partition per recording).")
+
+ALL = [production_job, training_job, produce_and_train_job, evaluation_job, table_job, rerender_job, teleop_job]

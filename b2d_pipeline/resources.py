@@ -22,6 +22,10 @@ class EpisodeStore(dg.ConfigurableResource):
     def raw_dir(self, setting: str) -> Path:
         return self.root / "raw" / setting
 
+    def teleop_dir(self, setting: str) -> Path:
+        """Where `b2d teleop` writes a setting's live recordings by default (the sensor watches it)."""
+        return self.root / "teleop" / setting
+
     def replay_dir(self, setting: str) -> Path:
         return self.root / "replays" / setting
 

@@ -13,7 +13,8 @@ from b2d_pipeline.settings import FactorySettings
 SETTING = "citrus_plate_loading__ur5_rh5dg2"
 
 ASSETS = {"setting_specs", "raw_recordings", "replays", "renders", "episodes", "policy_inputs", "act_checkpoint", "dp_checkpoint",
-          "scripted_operator_rollouts", "act_rollouts", "dp_rollouts", "evaluation_table", "lerobot_dataset"}
+          "scripted_operator_rollouts", "act_rollouts", "dp_rollouts", "evaluation_table", "lerobot_dataset",
+          "teleop_episodes"}
 
 
 def test_definitions_load():
