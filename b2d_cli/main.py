@@ -209,7 +209,7 @@ def validate(episode) -> None:
 
 @cli.command()
 @click.argument("part", type=click.Choice(["recorder", "replay", "tactile", "tactile-replay", "labels", "media",
-                                          "embodiments", "demos", "retarget", "teleop", "policy"]))
+                                          "embodiments", "demos", "retarget", "teleop", "policy", "chain"]))
 @click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay, tactile-replay).")
 @click.option("--steps", default=120, show_default=True,
               help="Control steps to record (recorder, replay, teleop); frames to retarget (retarget).")
@@ -234,7 +234,11 @@ def bench(part, profile, steps, workers, episodes, setting, operator, policy_nam
     # that way, 4.9 on one). 0 = on the calling thread. Read when the first GL context is made, which is
     # after this; a GPU driver ignores it; an LP_NUM_THREADS already set is kept.
     os.environ.setdefault("LP_NUM_THREADS", "0")
-    if part == "policy":
+    if part == "chain":
+        from b2d_pipeline.bench import run_chain_bench
+        key = setting[0] if setting else DEFAULT_SETTING
+        figures = run_chain_bench(key)       # the main job as `b2d materialize` runs it, on 1 then 2 processes
+    elif part == "policy":
         from policies.bench import run_policy_bench
         figures = run_policy_bench(policy_name, config_name, train_steps=train_steps, eval_episodes=eval_episodes)
     elif part == "demos":

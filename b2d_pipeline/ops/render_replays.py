@@ -4,6 +4,7 @@ gathers them. A replay that fails to render is reported by the gathering step af
 is written, as everywhere in the factory."""
 
 
+import warnings
 from pathlib import Path
 
 import dagster as dg
@@ -14,6 +15,8 @@ from episodes.stages import render_to_file
 from sim.registry import SensorProfile
 
 JSON_IO = "json_io"
+# an op's Output carrying the asset's data version is marked beta in Dagster 1.13; it is how a graph asset sets one
+warnings.filterwarnings("ignore", message=".*`data_version` of initializer `Output", category=dg.BetaWarning)
 
 
 def mapping_key(file_name: str) -> str:
