@@ -123,7 +123,11 @@ def eval_cmd(checkpoint_dir, remote, spec_file, setting, layout_file, channels, 
         for c in chans:
             rows += run_rollouts(policy, task, embodiment, c, anchors, episodes, max_steps=max_steps,
                                  progress=bar.update)
-    frame = records_frame(rows)
+    # provenance columns, as the pipeline's rollout records carry them: `b2d tables` reads them into its outputs
+    from result_tables.provenance import rollout_provenance
+    checkpoint = getattr(policy, "checkpoint", None)          # a remote policy has none
+    profile_hash = checkpoint.manifest.get("profile_hash") if checkpoint is not None else None
+    frame = records_frame(rows).assign(**rollout_provenance(profile_hash, max_steps))
     if out_file:
         write_records(frame, out_file)
     cells = cell_metrics(frame, by=("task", "embodiment", "policy", "channel"))

@@ -27,6 +27,9 @@ def test_train_then_eval_anchored_on_the_training_scenes(policy_episodes, tmp_pa
     import pandas as pd
     rows = pd.read_parquet(records)
     assert list(rows["anchor"]) == [p.stem for p in sorted(policy_episodes)][:2]
+    # provenance for `b2d tables`: the checkpoint's sensor profile and the horizon rule with its cap
+    assert set(rows["sensor_profile_hash"]) == {json.loads((out / "policy.json").read_text())["profile_hash"]}
+    assert rows["horizon_rule"].str.endswith("capped at 6").all()
 
 
 def test_bad_input_is_one_line_naming_what_is_wrong(tmp_path):
