@@ -17,17 +17,7 @@ import hdf5plugin  # noqa: F401  (registers the image filters of episodes.writer
 import numpy as np
 
 from episodes.atomic import atomic_path, guarded_h5
-
-
-def _datasets(f: h5py.File) -> dict[str, h5py.Dataset]:
-    found: dict[str, h5py.Dataset] = {}
-
-    def keep(name, obj) -> None:    # must return None: visititems stops at the first other value
-        if isinstance(obj, h5py.Dataset):
-            found[name] = obj
-
-    f.visititems(keep)
-    return found
+from episodes.integrity import datasets as _datasets
 
 
 def concat_frames(parts: list[Path], out_path: Path, frame_axis_datasets: tuple[str, ...] = ()) -> None:
