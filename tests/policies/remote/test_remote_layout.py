@@ -109,3 +109,14 @@ def test_b2d_layout_writes_the_file_and_prints_the_error(policy_episodes, tmp_pa
     summary = json.loads(result.stdout[result.stdout.index("{"):])
     assert summary["embodiment"] == EMBODIMENT and summary["state"]["slots_used"] == 32
     assert load_layout(out).report["state"] == summary["state"]
+
+
+def test_every_declared_layout_loads_and_names_its_embodiments_actuators():
+    from policies.remote.layout import LAYOUTS, _groups
+
+    declared = sorted(LAYOUTS.glob("*.yaml"))
+    assert declared, "no declared layouts"
+    for path in declared:
+        layout = load_layout(path)
+        assert layout.embodiment == path.stem and layout.dim == 32
+        assert layout.to_dict()["action"]["names"] == _groups(path.stem, "action")[0], path.name
