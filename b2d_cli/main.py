@@ -72,8 +72,9 @@ def _rows(kind: str) -> list[dict]:
                          "stages": [s["id"] for s in t.metrics.get("stages", [])]})
         return rows
     if kind == "settings":
-        return [{"key": s.key, "task": s.task, "embodiment": s.embodiment, "available": s.available}
-                for s in registry.paper_settings()]
+        from sim.tasks import is_recordable
+        return [{"key": s.key, "task": s.task, "embodiment": s.embodiment, "available": s.available,
+                 "recordable": is_recordable(s)} for s in registry.paper_settings()]
     if kind == "profiles":
         rows = []
         for name in registry.names("sensor_profiles"):
@@ -106,9 +107,19 @@ def list_cmd(kind: str, as_json: bool) -> None:
     if as_json:
         click.echo(json.dumps(rows, indent=2))
         return
-    for row in rows:
-        first, *rest = row.values()
-        click.echo(f"{first:<40} " + "  ".join(str(v) for v in rest))
+    click.echo(_aligned([list(rows[0])] + [[_cell(v) for v in row.values()] for row in rows]))
+
+
+def _cell(value) -> str:
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return ", ".join(map(str, value)) if isinstance(value, (list, tuple)) else str(value)
+
+
+def _aligned(lines: list[list[str]]) -> str:
+    """A header line and rows, each column as wide as its widest cell (the last one left ragged)."""
+    widths = [max(len(line[i]) for line in lines) for i in range(len(lines[0]) - 1)]
+    return "\n".join("  ".join([c.ljust(w) for c, w in zip(line, widths)] + [line[-1]]).rstrip() for line in lines)
 
 
 # ---------------------------------------------------------------- record / replay / validate
@@ -287,7 +298,7 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
 
     from b2d_pipeline.chain import materialize_chain
     from b2d_pipeline.instance import ensure_instance_yaml
-    from b2d_pipeline.partitions import setting_keys
+    from b2d_pipeline.partitions import recordable_setting_keys
     from b2d_pipeline.scale_out.instance_yaml import require_instance_services
     from b2d_pipeline.settings import FactorySettings, use_default_dagster_home
 
@@ -297,13 +308,13 @@ def materialize(settings_, all_settings, profile, episodes, eval_episodes, max_s
     settings = FactorySettings.from_env(**overrides)
     for key in settings_:
         registry.parse_setting_key(key)
-        if key not in setting_keys():    # the partitions hold only settings the operator can record
-            raise UnknownNameError("recordable setting", key, setting_keys())
+        if key not in recordable_setting_keys():    # the others are recorded by a person (`b2d teleop`)
+            raise UnknownNameError("recordable setting", key, recordable_setting_keys())
     home = use_default_dagster_home(settings.data_root)
     ensure_instance_yaml(home)
     require_instance_services(home)       # an instance on Postgres that is down: one line, how to start it
     with dg.DagsterInstance.get() as instance:
-        chosen = setting_keys() if all_settings else (list(settings_) or [DEFAULT_SETTING])
+        chosen = recordable_setting_keys() if all_settings else (list(settings_) or [DEFAULT_SETTING])
         results = materialize_chain(settings, chosen, instance,
                                     log=lambda m: click.echo(m, err=True))
     table = settings.data_root / "evaluation" / "evaluation_table.parquet"

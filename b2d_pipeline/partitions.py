@@ -9,7 +9,14 @@ from sim.tasks import is_recordable
 
 
 def setting_keys() -> list[str]:
-    """The paper's available settings that the scripted operator can demonstrate (a demo_plan)."""
+    """Every available paper setting: the partitions cover the whole benchmark. A setting whose task has
+    no demo_plan gets its demonstrations from a person (`b2d teleop`), not from `raw_recordings`."""
+    return [s.key for s in paper_settings() if s.available]
+
+
+def recordable_setting_keys() -> list[str]:
+    """The settings the scripted operator can demonstrate (their task has a demo_plan): what
+    `b2d materialize --all` runs."""
     return [s.key for s in paper_settings() if is_recordable(s)]
 
 

@@ -31,6 +31,13 @@ def test_list_json():
     assert len(settings) == 26
 
 
+def test_list_settings_says_which_can_be_recorded(unplanned):
+    lines = CliRunner().invoke(cli, ["list", "settings"]).output.splitlines()
+    assert lines[0].split() == ["key", "task", "embodiment", "available", "recordable"]
+    recordable = {line.split()[1]: line.split()[-1] for line in lines[1:]}
+    assert len(lines) == 27 and recordable[TASK] == "yes" and recordable[unplanned] == "no"
+
+
 def test_unknown_name_is_a_clear_error(tmp_path):
     result = CliRunner().invoke(cli, ["record", "--task", "nope", "--embodiment", EMBODIMENT, "--out", str(tmp_path)])
     assert result.exit_code == 2 and "valid task names" in result.output

@@ -141,6 +141,23 @@ def test_an_empty_partition_fails_saying_why(tmp_path):
     assert "no *.raw.h5 files in" in failure and SETTING in failure and "raw_recordings" in failure
 
 
+def test_partitions_cover_all_26_settings_and_an_unplanned_one_fails_saying_how_to_record_it(tmp_path):
+    from b2d_pipeline.partitions import recordable_setting_keys, setting_keys
+    from sim.registry import paper_settings
+    from sim.tasks import is_recordable
+
+    assert setting_keys() == [s.key for s in paper_settings()] and len(setting_keys()) == 26
+    assert SETTING in recordable_setting_keys() and set(recordable_setting_keys()) < set(setting_keys())
+    unplanned = next(s for s in paper_settings() if not is_recordable(s))
+    d = build_definitions(FactorySettings.from_env(data_root=tmp_path, profile="preview"))
+    with dg.DagsterInstance.ephemeral() as instance:
+        result = dg.materialize(list(d.assets), selection=["raw_recordings"], partition_key=unplanned.key,
+                                instance=instance, resources=d.resources, raise_on_error=False)
+    assert not result.success
+    failure = str(next(e for e in result.all_events if e.is_step_failure).event_specific_data)
+    assert "has no demo_plan" in failure and "b2d teleop" in failure and f"tasks/{unplanned.task}.yaml" in failure
+
+
 def test_renders_fan_out_one_step_per_replay_and_a_bad_replay_fails_only_itself(tmp_path, raw_path):
     from episodes.stages import replay_to_file
 

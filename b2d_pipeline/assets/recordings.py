@@ -9,6 +9,7 @@ from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.run_config import recording_config
 from b2d_pipeline.settings import FactorySettings
 from sim.registry import parse_setting_key
+from sim.tasks import is_recordable
 from teleop.demos import record_demonstrations
 
 
@@ -20,6 +21,11 @@ def build(settings: FactorySettings):
     def raw_recordings(context: dg.AssetExecutionContext, config: RecordingConfig,
                        store: EpisodeStore) -> dg.MaterializeResult:
         setting = parse_setting_key(context.partition_key)
+        if not is_recordable(setting):
+            raise dg.Failure(description=f"{setting.key}: task '{setting.task}' has no demo_plan, so the scripted "
+                             f"operator cannot record it; record it by hand with `b2d teleop` (its recordings "
+                             f"become `teleop_episodes` partitions) or add a demo_plan to "
+                             f"sim/catalog/tasks/{setting.task}.yaml")
         out = store.raw_dir(context.partition_key)
         results = record_demonstrations(setting.task, setting.embodiment, config.episodes, out,
                                         max_steps=config.max_steps)
