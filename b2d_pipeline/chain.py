@@ -67,13 +67,24 @@ def _environment(values: dict[str, str]):
                 os.environ[k] = v
 
 
+def past_durations(instance: dg.DagsterInstance, jobs, runs_per_job: int = 5) -> dict[str, list[float]]:
+    """Wall times of the last successful runs of each job on this instance (the ETA's prior)."""
+    found = {}
+    for job in jobs:
+        records = instance.get_run_records(dg.RunsFilter(job_name=job, statuses=[dg.DagsterRunStatus.SUCCESS]),
+                                           limit=runs_per_job)
+        times = [r.end_time - r.start_time for r in records if r.start_time and r.end_time]
+        if times:
+            found[job] = times
+    return found
+
+
 def _eta(durations: dict[str, list[float]], remaining: list[str]) -> str:
-    """Remaining runs at the mean time of earlier runs of the same job (of any job, for a job not run yet)."""
-    if not durations:
-        return "ETA -"
-    overall = [d for ds in durations.values() for d in ds]
-    mean = {job: sum(ds) / len(ds) for job, ds in durations.items()}
-    return "ETA " + _clock(sum(mean.get(job, sum(overall) / len(overall)) for job in remaining))
+    """Remaining runs at the mean time of the job's runs so far (this invocation's, else the instance's
+    earlier ones); "ETA ?" while a remaining job has never run here (a guess from other jobs misleads)."""
+    if any(job not in durations for job in remaining):
+        return "ETA ?"
+    return "ETA " + _clock(sum(sum(durations[job]) / len(durations[job]) for job in remaining))
 
 
 def _clock(seconds: float) -> str:
@@ -96,7 +107,8 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                          "ops": job_run_config(list(defs.resolve_job_def(job).graph.node_dict), settings)}
                    for job in JOBS}
     plan = run_plan(settings, setting_keys, channels)
-    results, failed_settings, started, durations = [], set(), time.perf_counter(), {}
+    results, failed_settings, started = [], set(), time.perf_counter()
+    durations, timed_here = past_durations(instance, JOBS), set()
     with _environment(settings.to_env()):
         for done, (setting, job, partition) in enumerate(plan):
             if setting in failed_settings:
@@ -110,7 +122,9 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                     else {})
             t0 = time.perf_counter()
             result = dg.execute_job(dg.reconstructable(JOBS[job]), instance, run_config=run_configs[job], tags=tags)
-            durations.setdefault(job, []).append(time.perf_counter() - t0)
+            if job not in timed_here:                 # this machine, this size: forget the older runs
+                durations[job], timed_here = [], timed_here | {job}
+            durations[job].append(time.perf_counter() - t0)
             results.append(result)
             if not result.success:
                 for event in result.all_events:

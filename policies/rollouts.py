@@ -29,13 +29,14 @@ def rollout_seed(task: str, channel_name: str, index: int) -> int:
 
 def run_rollouts(policy: Policy, task: str, embodiment: str, channel_name: str,
                  anchors: list[tuple[str, SceneSample]], episodes: int, max_steps: int | None = None,
-                 progress=None) -> list[dict]:
+                 progress=None, first: int = 0) -> list[dict]:
     """One row per rollout: the evaluator's episode record plus labels (task, embodiment, policy,
-    channel, episode, seed, anchor). `progress(1)` after each episode."""
+    channel, episode, seed, anchor), for episodes first..first+episodes-1 (an episode's seed and anchor
+    depend on its index only, so a cell can be run in chunks). `progress(1)` after each episode."""
     spec, chan = load_task(task), channel(channel_name)
     operator = getattr(policy, "operator_name", None)
     rows = []
-    for i in range(episodes):
+    for i in range(first, first + episodes):
         anchor_id, anchor = anchors[i % len(anchors)] if anchors else (None, None)
         seed = rollout_seed(task, channel_name, i)
         labels = {"task": task, "embodiment": embodiment, "policy": policy.name, "operator": operator,

@@ -23,6 +23,15 @@ def test_definitions_load():
     assert SETTING in defs.resolve_assets_def("raw_recordings").partitions_def.get_partition_keys()
 
 
+def test_the_eta_waits_until_every_remaining_job_has_a_time():
+    from b2d_pipeline.chain import _eta
+
+    assert _eta({}, ["produce_and_train"]) == "ETA ?"
+    assert _eta({"produce_and_train": [100.0]}, ["produce_and_train", "evaluate_policies"]) == "ETA ?"
+    assert _eta({"produce_and_train": [60.0, 120.0], "evaluate_policies": [30.0]},
+                ["produce_and_train", "evaluate_policies", "evaluate_policies"]) == "ETA 2:30"
+
+
 def test_profile_change_changes_render_code_version(tmp_path):
     preview = build_definitions(FactorySettings.from_env(data_root=tmp_path, profile="preview"))
     paper = build_definitions(FactorySettings.from_env(data_root=tmp_path, profile="paper"))
@@ -45,6 +54,9 @@ def test_materialize_whole_chain(tmp_path):
         runs = instance.get_runs()
         assert sorted(r.job_name for r in runs) == ["build_evaluation_table", "evaluate_policies",
                                                     "evaluate_policies", "produce_and_train"]
+        from b2d_pipeline.chain import past_durations
+        assert {job: len(times) for job, times in past_durations(instance, ["produce_and_train", "evaluate_policies"])
+                .items()} == {"produce_and_train": 1, "evaluate_policies": 2}    # the next run's ETA from the start
     assert all(r.success for r in results)
     assert lines[0].startswith("[1/4] produce_and_train [citrus_plate_loading__ur5_rh5dg2]  elapsed 0:00")
     profile_hash = settings.profile.content_hash

@@ -7,78 +7,56 @@ import dagster as dg
 from b2d_pipeline.assets.common import data_version
 from b2d_pipeline.partitions import setting_channel_partitions
 from b2d_pipeline.resources import EpisodeStore
+from b2d_pipeline.ops.rollouts import build_rollout_graph
 from b2d_pipeline.run_config import rollout_config
 from b2d_pipeline.settings import FactorySettings
 from evaluation.metrics import channel_robustness
 from policies.anchors import checkpoint_anchors, episode_anchors
-from policies.records import records_frame, write_records
-from policies.rollouts import run_rollouts
+from policies.records import write_records
 from policies.scripted_baseline import ScriptedBaseline
 from result_tables import RecordsError, summarize, write_outputs
 from result_tables.provenance import B2D_SEED_RULE, rollout_provenance
-from sim.registry import parse_setting_key, sensor_profile
+from sim.registry import sensor_profile
 
 BASELINE = "scripted_operator"
 CELL = ("task", "embodiment", "policy", "channel")
 
 
-def _rollout_result(store: EpisodeStore, rows: list[dict], policy: str, setting: str, channel: str,
-                    anchors: int, provenance: dict) -> dg.MaterializeResult:
-    df = records_frame(rows).assign(**provenance)   # result_tables reads these into every output
-    out = write_records(df, store.rollout_path(policy, setting, channel))
-    described = store.describe([out])
-    errors = int((df.get("termination") == "error").sum()) if "termination" in df else 0
-    return dg.MaterializeResult(
-        metadata={"rollouts": len(df), "successes": int(df["success"].sum()), "errors": errors, "anchors": anchors,
-                  "file": dg.MetadataValue.path(str(out))},
-        data_version=data_version(described))
-
-
 def build_baseline_rollouts(settings: FactorySettings):
     profile = settings.profile
-    RolloutConfig = rollout_config(settings)
 
-    # 3: rollouts through the policy interface's closed-loop runner (control steps and queries counted)
-    @dg.asset(name=f"{BASELINE}_rollouts", partitions_def=setting_channel_partitions, group_name="evaluation",
-              deps=["episodes"], code_version="3",
-              description="The privileged scripted baseline (reads the simulator, no images) per channel, anchored "
-                          "on the recorded episodes.")
-    def rollouts(context: dg.AssetExecutionContext, config: RolloutConfig,
-                 store: EpisodeStore) -> dg.MaterializeResult:
-        keys = context.partition_key.keys_by_dimension
-        setting = parse_setting_key(keys["setting"])
-        anchors = episode_anchors(list(store.episode_dir(profile.content_hash, keys["setting"]).glob("episode_*.hdf5")))
-        rows = run_rollouts(ScriptedBaseline(), setting.task, setting.embodiment, keys["channel"], anchors,
-                            config.episodes, max_steps=config.max_steps)
-        return _rollout_result(store, rows, BASELINE, keys["setting"], keys["channel"], len(anchors),
-                               rollout_provenance(profile.content_hash, config.max_steps))
+    def cell(store: EpisodeStore, setting: str):
+        return ScriptedBaseline(), episode_anchors(list(store.episode_dir(profile.content_hash, setting)
+                                                        .glob("episode_*.hdf5")))
 
-    return rollouts
+    # 4: one step per chunk of episodes (b2d_pipeline/ops/rollouts.py); 3: through the closed-loop runner
+    return dg.graph_asset(
+        build_rollout_graph(f"{BASELINE}_rollouts", rollout_config(settings), cell,
+                            lambda chunk: rollout_provenance(profile.content_hash, chunk["max_steps"])),
+        name=f"{BASELINE}_rollouts", ins={"upstream": dg.AssetIn("episodes", dagster_type=dg.Nothing)},
+        partitions_def=setting_channel_partitions, group_name="evaluation", code_version="4",
+        description="The privileged scripted baseline (reads the simulator, no images) per channel, anchored on "
+                    "the recorded episodes.")
 
 
 def build_policy_rollouts(settings: FactorySettings, policy: str):
     cfg = settings.policy_configs()[policy]
-    RolloutConfig = rollout_config(settings)
+    profile_hash = sensor_profile(cfg.observation.sensor_profile).content_hash
 
-    @dg.asset(name=f"{policy}_rollouts", partitions_def=setting_channel_partitions, group_name="evaluation",
-              deps=[f"{policy}_checkpoint"], code_version="1",
-              description=f"{policy.upper()} ({cfg.name}) in closed loop per channel: its views rendered online at "
-                          "20 Hz, anchored on its training scenes.")
-    def rollouts(context: dg.AssetExecutionContext, config: RolloutConfig,
-                 store: EpisodeStore) -> dg.MaterializeResult:
+    def cell(store: EpisodeStore, setting: str):
         from policies.learned import LearnedPolicy
 
-        keys = context.partition_key.keys_by_dimension
-        setting = parse_setting_key(keys["setting"])
-        learned = LearnedPolicy(store.checkpoint_dir(policy, cfg.name, keys["setting"]))
-        anchors = checkpoint_anchors(learned.checkpoint.manifest)
-        rows = run_rollouts(learned, setting.task, setting.embodiment, keys["channel"], anchors,
-                            config.episodes, max_steps=config.max_steps)
-        return _rollout_result(store, rows, learned.name, keys["setting"], keys["channel"], len(anchors),
-                               rollout_provenance(sensor_profile(cfg.observation.sensor_profile).content_hash,
-                                                  config.max_steps))
+        learned = LearnedPolicy(store.checkpoint_dir(policy, cfg.name, setting))
+        return learned, checkpoint_anchors(learned.checkpoint.manifest)
 
-    return rollouts
+    # 2: one step per chunk of episodes (b2d_pipeline/ops/rollouts.py)
+    return dg.graph_asset(
+        build_rollout_graph(f"{policy}_rollouts", rollout_config(settings), cell,
+                            lambda chunk: rollout_provenance(profile_hash, chunk["max_steps"])),
+        name=f"{policy}_rollouts", ins={"upstream": dg.AssetIn(f"{policy}_checkpoint", dagster_type=dg.Nothing)},
+        partitions_def=setting_channel_partitions, group_name="evaluation", code_version="2",
+        description=f"{policy.upper()} ({cfg.name}) in closed loop per channel: its views rendered online at 20 Hz, "
+                    "anchored on its training scenes.")
 
 
 def build_table(rollout_assets: list):
