@@ -44,6 +44,16 @@ def one_line(exc: BaseException, subject: str | Path | None = None) -> str:
     return message[:2000]
 
 
+def message(exc: BaseException) -> str:
+    """What a command prints for an error: the project's own errors as written (a schema's findings keep
+    one per line), anything else on one line."""
+    from sim.errors import SpecError, UnknownNameError
+
+    if isinstance(exc, (SpecError, UnknownNameError)) and not is_disk_full(exc):
+        return str(exc)
+    return one_line(exc)
+
+
 def report_batch(action: str, total: int, failed: list[tuple[str | Path, BaseException]]) -> None:
     """The summary of a batch command, on stderr, and its exit (nothing when all went well)."""
     if not failed:

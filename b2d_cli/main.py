@@ -20,28 +20,21 @@ from b2d_cli.tactile_cmd import tactile
 from b2d_cli.tasks_cmd import tasks
 from b2d_cli.teleop_cmd import teleop
 from sim import registry
-from sim.errors import SpecError, UnknownNameError
-
-
-def _fail(message: str) -> None:
-    click.echo(f"error: {message}", err=True)
-    sys.exit(2)
+from sim.errors import UnknownNameError
 
 
 class _Group(click.Group):
-    """Turn any error into one clear line: exit code 2 for bad input, 1 for other faults (b2d_cli/errors.py)."""
+    """Turn any error into one clear message: exit code 2 for bad input, 1 for other faults (b2d_cli/errors.py)."""
 
     def invoke(self, ctx):
         try:
             return super().invoke(ctx)
-        except (SpecError, UnknownNameError) as exc:
-            _fail(str(exc))
         except (click.exceptions.ClickException, click.exceptions.Exit, click.exceptions.Abort):
             raise
         except Exception as exc:
             if cli_errors.show_traceback():
                 raise
-            click.echo(f"error: {cli_errors.one_line(exc)}", err=True)
+            click.echo(f"error: {cli_errors.message(exc)}", err=True)
             cli_errors.leave(cli_errors.exit_code(exc), [exc])
 
 
