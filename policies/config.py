@@ -90,8 +90,8 @@ class PolicyConfig(_Strict):
 
     def model_config_object(self):
         """The model's own pydantic config (ACTConfig / DiffusionConfig), validated."""
-        from policies.models import model_class
-        return model_class(self.policy).config_class(**self.model)
+        from policies.models import config_class
+        return config_class(self.policy)(**self.model)
 
 
 def config_names(policy: str) -> list[str]:
@@ -118,8 +118,8 @@ def load_policy_config(policy: str, name_or_path: str) -> PolicyConfig:
 
 def parse_policy_config(raw: dict, path=None, policy: str | None = None) -> PolicyConfig:
     cfg = validate(PolicyConfig, raw, path)
-    from policies.models import model_class
-    model_config_class = model_class(cfg.policy).config_class
+    from policies.models import config_class
+    model_config_class = config_class(cfg.policy)
     try:   # strict here: the file's "12" or `true` where a number belongs is a mistake, not a value
         model_config_class.model_validate(cfg.model, strict=True)
     except pydantic.ValidationError as exc:
