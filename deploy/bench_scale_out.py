@@ -2,8 +2,10 @@
 (through deploy/*.sh), how long two Celery workers take to answer, and the wall time of one partition of the
 probe graph (b2d_pipeline/scale_out/probe.py: 4 steps of 0.3 s, two of them side by side) through the
 celery executor against the in-process and multiprocess executors, all on the same Postgres instance.
+With --renders, also a real partition: one setting's `renders` (one render_replay step per replay, the
+replays recorded first with --max-steps control steps each) in process against two Celery workers.
 
-    .venv/bin/python deploy/bench_scale_out.py [--repeats 3]
+    .venv/bin/python deploy/bench_scale_out.py [--repeats 3] [--renders --replays 2 --max-steps 60]
 
 Everything lives in a temporary folder on free ports and is stopped and removed at the end."""
 
@@ -44,6 +46,10 @@ def timed_script(script: str, action: str, env: dict) -> float:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--renders", action="store_true", help="also time a real partition of `renders`")
+    parser.add_argument("--replays", type=int, default=2, help="replays in that partition (one step each)")
+    parser.add_argument("--max-steps", type=int, default=60, help="control steps per recorded demonstration")
+    parser.add_argument("--profile", default="policy_tiny", help="sensor profile of the renders")
     args = parser.parse_args()
     root = Path(tempfile.mkdtemp(prefix="b2d-bench-", dir="/tmp"))
     root.chmod(0o755)                  # as root, postgres runs as user postgres and must reach its folder
@@ -65,13 +71,20 @@ def main() -> None:
         dg.DagsterInstance.from_config(str(home)).dispose()
         figures["dagster schema on a new database"] = time.perf_counter() - started
         os.environ.update(DAGSTER_HOME=str(home), B2D_CELERY_BROKER=f"{redis}/0", B2D_CELERY_BACKEND=f"{redis}/1")
+        preload = ("b2d_pipeline.scale_out.probe",)
+        if args.renders:      # the workers rebuild the factory's definitions from these settings
+            os.environ.update(B2D_DATA_ROOT=str(root / "data"), B2D_PROFILE=args.profile,
+                              MUJOCO_GL=os.environ.get("MUJOCO_GL") or "egl")
+            preload += ("b2d_pipeline.chain",)
         started = time.perf_counter()
-        with LocalWorkers(["w1", "w2"], dict(os.environ), root, preload=("b2d_pipeline.scale_out.probe",)) as workers:
-            workers.wait_ready(f"{redis}/0")
+        with LocalWorkers(["w1", "w2"], dict(os.environ), root, preload=preload) as workers:
+            workers.wait_ready(f"{redis}/0", timeout=300)
             figures["two celery workers ready"] = time.perf_counter() - started
             for name, _ in figures.items():
                 print(f"{name:42s} {figures[name]:6.2f} s")
             walls = run_probe(home, args.repeats)
+            if args.renders:
+                render_walls = run_renders(home, root / "data", args)
     finally:
         for script in ("redis.sh", "postgres.sh"):
             subprocess.run([str(DEPLOY / script), "stop"], env=env, capture_output=True)
@@ -83,6 +96,45 @@ def main() -> None:
         median = statistics.median(runs)
         print(f"  {name:13s} median {median:6.2f} s  ({' '.join(f'{w:.2f}' for w in runs)})  "
               f"x{median / base:.2f} of in_process")
+    if args.renders:
+        print(f"\nrenders of one setting ({args.replays} replays of {args.max_steps} control steps, profile "
+              f"{args.profile}), {args.repeats} runs each, instance on Postgres:")
+        base = statistics.median(w for w, _ in render_walls["in_process"])
+        for name, runs in render_walls.items():
+            median = statistics.median(w for w, _ in runs)
+            print(f"  {name:13s} median {median:6.2f} s  ({' '.join(f'{w:.2f} (load {l:.1f})' for w, l in runs)})  "
+                  f"x{median / base:.2f} of in_process")
+
+
+def run_renders(home: Path, data_root: Path, args) -> dict[str, list[tuple[float, float]]]:
+    """(wall seconds, 1-minute load average at the end) per run of the partition, in process and on the workers."""
+    import sys
+
+    from b2d_pipeline.chain import produce_and_train
+    from b2d_pipeline.resources import EpisodeStore
+    from episodes.stages import replay_to_file
+    from teleop.demos import record_demonstrations
+
+    setting = "citrus_plate_loading__ur5_rh5dg2"
+    task, embodiment = setting.split("__")
+    recorded = record_demonstrations(task, embodiment, args.replays, data_root / "recorded", max_steps=args.max_steps)
+    folder = EpisodeStore(data_root=str(data_root)).replay_dir(setting)
+    folder.mkdir(parents=True, exist_ok=True)
+    for r in recorded:
+        replay_to_file(r.path, folder / r.path.name.replace(".raw.h5", ".replay.h5"))
+    walls = {"in_process": [], "celery": []}
+    quiet = {"loggers": {"console": {"config": {"log_level": "ERROR"}}}}
+    with dg.DagsterInstance.from_config(str(home)) as instance:
+        for _ in range(args.repeats):
+            for name in walls:                 # interleaved, as above
+                os.environ["B2D_EXECUTOR"] = name
+                started = time.perf_counter()
+                result = dg.execute_job(dg.reconstructable(produce_and_train), instance, run_config=quiet,
+                                        asset_selection=[dg.AssetKey("renders")], tags={"dagster/partition": setting})
+                walls[name].append((time.perf_counter() - started, os.getloadavg()[0]))
+                assert result.success, name
+                print(f"  renders {name}: {walls[name][-1][0]:.2f} s", file=sys.stderr)
+    return walls
 
 
 def run_probe(home: Path, repeats: int) -> dict[str, list[float]]:

@@ -5,6 +5,7 @@ Skipped, with the reason, where the Debian packages or the `scale` extra are not
 from __future__ import annotations
 
 import glob
+import os
 import shutil
 import tempfile
 import time
@@ -12,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from loopback_services import NEEDS_POSTGRES, NEEDS_REDIS, free_port, run_script
+from loopback_services import CELERY_PROFILE, NEEDS_POSTGRES, NEEDS_REDIS, free_port, run_script
 
 
 @pytest.fixture(scope="session")
@@ -62,3 +63,25 @@ def postgres_home(postgres, tmp_path):
     home = tmp_path / "dagster_home"
     write_postgres_instance_yaml(home, postgres[0])
     return home
+
+
+@pytest.fixture(scope="session")
+def celery_run(postgres, redis, tmp_path_factory):
+    """Two Celery workers (w1, w2: subprocesses, one step at a time each) on the test's Redis, for runs on an
+    instance in the test's PostgreSQL, with the factory's settings in their environment (data root, a small
+    sensor profile). Yields (names of the workers, DAGSTER_HOME, the environment a run needs)."""
+    from b2d_pipeline.scale_out import write_postgres_instance_yaml
+    from b2d_pipeline.scale_out.local_workers import LocalWorkers
+
+    home = tmp_path_factory.mktemp("celery_home")
+    write_postgres_instance_yaml(home, postgres[0])
+    base = redis[0]
+    run_env = {"B2D_CELERY_BROKER": f"{base}/0", "B2D_CELERY_BACKEND": f"{base}/1", "B2D_EXECUTOR": "celery",
+               "B2D_DATA_ROOT": str(tmp_path_factory.mktemp("celery_data")), "B2D_PROFILE": CELERY_PROFILE}
+    env = {**os.environ, **run_env, "DAGSTER_HOME": str(home), "MUJOCO_GL": os.environ.get("MUJOCO_GL") or "egl"}
+    workers = LocalWorkers(["w1", "w2"], env, tmp_path_factory.mktemp("celery_logs"),
+                           preload=("b2d_pipeline.scale_out.probe", "b2d_pipeline.chain"))
+    try:
+        yield workers.wait_ready(run_env["B2D_CELERY_BROKER"]), home, run_env
+    finally:
+        workers.stop()

@@ -75,3 +75,45 @@ def test_unknown_executor_lists_the_valid_names():
         executor_named("dask")
     assert executor_named("default") is dg.multi_or_in_process_executor
 
+
+
+# `b2d materialize` itself: the service that is down is the last line, no traceback, and nothing is produced
+
+def _materialize(monkeypatch, tmp_path, **env):
+    from click.testing import CliRunner
+
+    from b2d_cli.main import cli
+
+    monkeypatch.delenv("B2D_TRACEBACK", raising=False)
+    for name, value in {"B2D_DATA_ROOT": str(tmp_path / "data"), "DAGSTER_HOME": str(tmp_path / "home"), **env}.items():
+        monkeypatch.setenv(name, value)
+    result = CliRunner().invoke(cli, ["materialize", "--max-steps", "4"])
+    return result, result.output.strip().splitlines()[-1]
+
+
+def test_materialize_on_celery_with_redis_down_says_so_in_one_line(tmp_path, monkeypatch):
+    pytest.importorskip("dagster_celery", reason="dagster-celery is not installed (pip install -e '.[scale]')")
+    port = free_port()
+    result, last = _materialize(monkeypatch, tmp_path, B2D_EXECUTOR="celery", B2D_CELERY_BROKER=f"redis://127.0.0.1:{port}/0")
+    assert result.exit_code == 1
+    assert last == (f"error: ServiceUnavailable: Redis (Celery broker) is not reachable at 127.0.0.1:{port}: "
+                    f"connection refused; start it with `B2D_REDIS_PORT={port} deploy/redis.sh start`")
+    assert "Traceback" not in result.output
+    assert not (tmp_path / "data" / "raw").exists()           # no step ran
+
+
+def test_materialize_on_a_postgres_instance_that_is_down_says_so_in_one_line(tmp_path, monkeypatch):
+    port = free_port()
+    path = write_postgres_instance_yaml(tmp_path / "home")        # the URL from B2D_POSTGRES_URL
+    result, last = _materialize(monkeypatch, tmp_path, B2D_POSTGRES_URL=f"postgresql://b2d:secret@127.0.0.1:{port}/b2d")
+    assert result.exit_code == 1
+    assert last == (f"error: ServiceUnavailable: Postgres (instance storage of {path}) is not reachable at "
+                    f"127.0.0.1:{port}: connection refused; start it with `B2D_PG_PORT={port} deploy/postgres.sh start`")
+    assert "secret" not in result.output and "Traceback" not in result.output
+    assert not (tmp_path / "data").exists()
+
+    monkeypatch.delenv("B2D_POSTGRES_URL")                         # the variable the file reads is not set
+    result, last = _materialize(monkeypatch, tmp_path)
+    assert result.exit_code == 2
+    assert last.startswith(f"error: ValueError: {path}: storage.postgres.postgres_url reads the environment variable "
+                           "B2D_POSTGRES_URL, which is not set")
