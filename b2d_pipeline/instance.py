@@ -1,5 +1,6 @@
 """The project's Dagster instance settings: written as `dagster.yaml` into DAGSTER_HOME when it has none, so
-that a first run prints no telemetry banner and no missing-file warning, and the run queue matches the machine."""
+that a first run prints no telemetry banner and no missing-file warning, and the run queue and the CPU pool
+match the machine."""
 
 from __future__ import annotations
 
@@ -15,8 +16,13 @@ def instance_config(cores: int | None = None) -> dict:
     cores = cores or os.cpu_count() or 1
     return {
         "telemetry": {"enabled": False},
-        # one run per core: each run renders, simulates or trains on one core
-        "run_queue": {"max_concurrent_runs": cores},
+        "concurrency": {
+            # one queued run per core, and across all runs at most one CPU-bound step per core (the
+            # b2d_cpu pool: b2d_pipeline/assets/common.py): a backfill of many partitions keeps both
+            # cores busy without running cores x cores simulations at once
+            "runs": {"max_concurrent_runs": cores},
+            "pools": {"default_limit": cores, "granularity": "op"},
+        },
     }
 
 

@@ -120,7 +120,8 @@ def test_the_project_writes_its_dagster_yaml_once(tmp_path):
 
     path = ensure_instance_yaml(tmp_path / "home")
     config = yaml.safe_load(path.read_text())
-    assert config["telemetry"] == {"enabled": False} and config["run_queue"]["max_concurrent_runs"] >= 1
+    assert config["telemetry"] == {"enabled": False} and config["concurrency"]["runs"]["max_concurrent_runs"] >= 1
+    assert config["concurrency"]["pools"]["default_limit"] == config["concurrency"]["runs"]["max_concurrent_runs"]
     with dg.DagsterInstance.from_config(str(tmp_path / "home")) as instance:   # Dagster accepts what b2d writes
         assert instance.run_coordinator is not None
     path.write_text("telemetry:\n  enabled: true\n")          # a user's own settings are kept

@@ -6,6 +6,10 @@ import json
 
 import dagster as dg
 
+# The steps that keep a core busy (simulate, render, assemble, train, roll out) share this pool; the
+# instance limits it to one step per core over every run (b2d_pipeline/instance.py).
+CPU_POOL = "b2d_cpu"
+
 
 def data_version(described: dict, *extra: str) -> dg.DataVersion:
     blob = json.dumps({k: v["sha256"] for k, v in sorted(described.items())}, sort_keys=True) + "".join(extra)

@@ -3,7 +3,7 @@
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors, require_inputs
+from b2d_pipeline.assets.common import CPU_POOL, data_version, fail_if_errors, require_inputs
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.schedules import FOLLOW_UPSTREAM
@@ -16,7 +16,7 @@ from episodes.stages import assemble_episode
 def build(settings: FactorySettings):
     profile = settings.profile
 
-    @dg.asset(partitions_def=settings_partitions, group_name="episodes", deps=["replays", "renders"],
+    @dg.asset(partitions_def=settings_partitions, group_name="episodes", pool=CPU_POOL, deps=["replays", "renders"],
               code_version=f"3-{profile.content_hash}",   # 3: schema b2d.episode/2 (labels, joints, distractors)
               automation_condition=FOLLOW_UPSTREAM,
               description="Synchronized multimodal episodes (meta, time, action, cameras, robot incl. tactile, "

@@ -8,7 +8,7 @@ import hashlib
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import fail_if_errors
+from b2d_pipeline.assets.common import CPU_POOL, fail_if_errors
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.settings import FactorySettings
@@ -25,7 +25,7 @@ def lerobot_dir(store: EpisodeStore, profile_hash: str, setting: str):
 def build(settings: FactorySettings):
     profile = settings.profile
 
-    @dg.asset(partitions_def=settings_partitions, group_name="export", deps=["episodes"],
+    @dg.asset(partitions_def=settings_partitions, group_name="export", pool=CPU_POOL, deps=["episodes"],
               code_version=f"1-{LEROBOT_FORMAT}-{profile.content_hash}",
               automation_condition=dg.AutomationCondition.eager(),
               description=f"The setting's episodes as a LeRobot {LEROBOT_FORMAT} dataset (parquet, one MP4 per "

@@ -3,7 +3,7 @@
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors
+from b2d_pipeline.assets.common import CPU_POOL, data_version, fail_if_errors
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.run_config import recording_config
@@ -16,7 +16,7 @@ from teleop.demos import record_demonstrations
 def build(settings: FactorySettings):
     RecordingConfig = recording_config(settings)
 
-    @dg.asset(partitions_def=settings_partitions, group_name="recordings", code_version="1", deps=["setting_specs"],
+    @dg.asset(partitions_def=settings_partitions, group_name="recordings", pool=CPU_POOL, code_version="1", deps=["setting_specs"],
               description="Raw demonstrations: actions, post-step states and evaluator state per step.")
     def raw_recordings(context: dg.AssetExecutionContext, config: RecordingConfig,
                        store: EpisodeStore) -> dg.MaterializeResult:

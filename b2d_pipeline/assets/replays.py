@@ -3,7 +3,7 @@
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors, require_inputs
+from b2d_pipeline.assets.common import CPU_POOL, data_version, fail_if_errors, require_inputs
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
 from episodes.stages import replay_to_file
@@ -11,7 +11,7 @@ from episodes.stages import replay_to_file
 
 def build():
     # 2: replays also store distractor states and articulated-object joint states.
-    @dg.asset(partitions_def=settings_partitions, group_name="replays", code_version="2", deps=["raw_recordings"],
+    @dg.asset(partitions_def=settings_partitions, group_name="replays", pool=CPU_POOL, code_version="2", deps=["raw_recordings"],
               description="Seeded re-simulation of every raw recording; profile-independent.")
     def replays(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
         key = context.partition_key

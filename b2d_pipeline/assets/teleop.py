@@ -6,6 +6,7 @@ under the active sensor profile like the scripted demonstrations."""
 
 import dagster as dg
 
+from b2d_pipeline.assets.common import CPU_POOL
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.settings import FactorySettings
 from episodes.stages import raw_to_episode
@@ -26,7 +27,7 @@ def split_key(key: str) -> tuple[str, str]:
 def build(settings: FactorySettings):
     profile = settings.profile
 
-    @dg.asset(partitions_def=teleop_partitions, group_name="teleop", code_version=f"1-{profile.content_hash}",
+    @dg.asset(partitions_def=teleop_partitions, group_name="teleop", pool=CPU_POOL, code_version=f"1-{profile.content_hash}",
               description=f"One live teleoperation recording as an HDF5 episode under '{profile.name}' "
                           "(replayed, rendered, assembled).")
     def teleop_episodes(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:

@@ -4,7 +4,7 @@ since Dagster's multi-partitions have two dimensions and the policy is a third."
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors
+from b2d_pipeline.assets.common import CPU_POOL, data_version, fail_if_errors
 from b2d_pipeline.partitions import settings_partitions
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.run_config import training_config
@@ -26,7 +26,7 @@ def build_policy_inputs(settings: FactorySettings):
     profiles = input_profiles(settings)
     version = "-".join(f"{p.name}:{p.content_hash}" for p in profiles.values())
 
-    @dg.asset(partitions_def=settings_partitions, group_name="training", deps=["replays"], code_version=f"1-{version}",
+    @dg.asset(partitions_def=settings_partitions, group_name="training", deps=["replays"], pool=CPU_POOL, code_version=f"1-{version}",
               description="Training episodes at the policies' inputs: the stored replays rendered under each policy "
                           f"sensor profile ({', '.join(profiles)}).")
     def policy_inputs(context: dg.AssetExecutionContext, store: EpisodeStore) -> dg.MaterializeResult:
@@ -57,7 +57,7 @@ def build_checkpoint(settings: FactorySettings, policy: str):
 
     # the config's content hash: a changed config marks the checkpoint (and rollouts) stale; the step
     # budget is run config, recorded in the checkpoint's manifest and so in its data version
-    @dg.asset(name=f"{policy}_checkpoint", partitions_def=settings_partitions, group_name="training",
+    @dg.asset(name=f"{policy}_checkpoint", partitions_def=settings_partitions, group_name="training", pool=CPU_POOL,
               deps=["policy_inputs"], code_version=f"1-{cfg.content_hash}",
               description=f"{policy.upper()} ({cfg.name} config: {cfg.description}) trained on the setting's "
                           f"episodes under '{profile.name}'. Safetensors + JSON.")

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version, fail_if_errors, require_inputs
+from b2d_pipeline.assets.common import CPU_POOL, data_version, fail_if_errors, require_inputs
 from b2d_pipeline.resources import EpisodeStore
 from episodes.stages import render_to_file
 from sim.registry import SensorProfile
@@ -31,7 +31,7 @@ def build_render_graph(profile: SensorProfile, render_workers: int):
         for replay in require_inputs(sorted(folder.glob("*.replay.h5")), folder, "*.replay.h5", "replays"):
             yield dg.DynamicOutput(str(replay), mapping_key=mapping_key(replay.name))
 
-    @dg.op(out=dg.Out(dict, io_manager_key=JSON_IO))
+    @dg.op(out=dg.Out(dict, io_manager_key=JSON_IO), pool=CPU_POOL)
     def render_replay(context: dg.OpExecutionContext, store: EpisodeStore, replay: str) -> dict:
         replay_path = Path(replay)
         out = (store.render_dir(profile.content_hash, context.partition_key)

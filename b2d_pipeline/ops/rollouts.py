@@ -13,7 +13,7 @@ from typing import Callable
 
 import dagster as dg
 
-from b2d_pipeline.assets.common import data_version
+from b2d_pipeline.assets.common import CPU_POOL, data_version
 from b2d_pipeline.ops.render_replays import JSON_IO
 from b2d_pipeline.resources import EpisodeStore
 from policies.records import records_frame, write_records
@@ -36,7 +36,7 @@ def build_rollout_graph(name: str, Config: type[dg.Config], make_cell: Callable,
             yield dg.DynamicOutput({"first": first, "count": count, "max_steps": config.max_steps},
                                    mapping_key=f"episodes_{first:05d}")
 
-    @dg.op(name=f"run_{name}", out=dg.Out(dict, io_manager_key=JSON_IO))
+    @dg.op(name=f"run_{name}", out=dg.Out(dict, io_manager_key=JSON_IO), pool=CPU_POOL)
     def run_chunk(context: dg.OpExecutionContext, store: EpisodeStore, chunk: dict) -> dict:
         keys = context.partition_key.keys_by_dimension
         setting = parse_setting_key(keys["setting"])
