@@ -39,8 +39,10 @@ from .cameras import add_cameras
 from .description import (EmbodimentDescription, GeomSpec, HandDescription, LinkSpec, Transform,
                           coupled_position, load_embodiment, mat_to_quat)
 from .kinematics import ArmKinematics, axis_rotation, hand_link_poses
-from .mirror import side_links, side_pad, side_transform
-from .real_model import add_real_actuators, attach_real_hand, requested_hand_model
+from .mirror import side_links, side_transform
+from .real_model import add_real_actuators, attach_real_hand
+from .real_model_file import requested_hand_model
+from .tactile_block import side_pad
 
 log = logging.getLogger(__name__)
 

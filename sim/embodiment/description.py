@@ -24,8 +24,9 @@ from sim.schema.embodiment import CAMERA_NAMES
 from .arm_file import KEEP_SIGN_MARGIN_RAD, ArmDescription, arm_names, load_arm
 from .catalog_paths import ARMS_DIR, CATALOG_DIR, EMBODIMENTS_DIR, HANDS_DIR
 from .embodiment_file import DEFAULT_FOVY, CameraSpec, EmbodimentDescription, embodiment_names, load_embodiment
-from .fields import DescriptionError, _Ctx, _expected_error, _get, _num, _transform, _vec
-from .frames import Transform, frame_from_axes, frame_transform, mat_to_quat, quat_to_mat, rpy_to_matrix
+from .fields import DescriptionError, _Ctx, _expected_error, _get, _num, _vec
+from .frames import (Transform, _transform, frame_from_axes, frame_transform, mat_to_quat, quat_to_mat,
+                     rpy_to_matrix)
 from .hand_file import (ActuatorSpec, CouplingSpec, GraspProbe, HandDescription, TabletopGrasp, coupled_position,
                         coupled_slope, hand_names, load_hand, read_hand_file)
 from .links import GEOM_TYPES, GeomSpec, Inertial, JointSpec, LinkSpec

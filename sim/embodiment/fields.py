@@ -84,22 +84,3 @@ def _num(v, ctx: _Ctx, positive: bool = False) -> float:
     if positive and not x > 0:
         ctx.fail(f"expected a positive number, got {x}")
     return x
-
-
-def _transform(d: dict | None, ctx: _Ctx):
-    """``{xyz, rpy}`` or ``{xyz, z, y}`` (frame from axes) or ``{xyz, quat}`` (w, x, y, z)."""
-    from .frames import Transform, frame_from_axes, quat_to_mat, rpy_to_matrix
-
-    if d is None:
-        return Transform.identity()
-    pos = _vec(d.get("xyz", [0, 0, 0]), 3, ctx.sub("xyz"))
-    if "rpy" in d:
-        rot = rpy_to_matrix(_vec(d["rpy"], 3, ctx.sub("rpy")))
-    elif "z" in d:
-        rot = frame_from_axes(_vec(d["z"], 3, ctx.sub("z")), _vec(_get(d, "y", ctx), 3, ctx.sub("y")))
-    elif "quat" in d:
-        rot = quat_to_mat(_vec(d["quat"], 4, ctx.sub("quat")) / np.linalg.norm(d["quat"]))
-    else:
-        rot = np.eye(3)
-    return Transform(pos, rot)
-

@@ -21,6 +21,7 @@ from .fields import _Ctx
 from .frames import Transform, frame_transform
 from .links import NO_GEOM_DEFAULTS, NO_JOINT_DEFAULTS, JointSpec, LinkSpec, build_geom, build_inertial, build_joint, \
     contact_excludes
+from .real_model_file import parse_real_model
 from .tactile_block import TactileSpec, hand_tactile
 
 
@@ -231,8 +232,6 @@ def read_hand_file(path: Path) -> HandDescription:
     tactile = hand_tactile(data, ctx, {link.name for link in links}, fingers)
     real_model = None
     if m.real_model is not None:
-        from .real_model import parse_real_model   # late: real_model builds on the hand's links
-
         real_model = parse_real_model(data["real_model"], ctx.sub("real_model"), links, fingers,
                                       [a.name for a in actuators], {s.attach_body for s in tactile.sites})
     return HandDescription(

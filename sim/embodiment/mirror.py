@@ -20,7 +20,6 @@ import numpy as np
 
 from .frames import Transform
 from .links import GeomSpec, JointSpec, LinkSpec
-from .tactile_block import TactilePad
 
 M = np.diag([-1.0, 1.0, 1.0])
 
@@ -63,18 +62,9 @@ def mirror_link(link: LinkSpec) -> LinkSpec:
     )
 
 
-def mirror_pad(p: TactilePad) -> TactilePad:
-    return dataclasses.replace(p, center=mirror_vec(p.center), normal=mirror_vec(p.normal),
-                               axis=mirror_vec(p.axis))
-
-
 def side_transform(T: Transform, side: str) -> Transform:
     return mirror_transform(T) if side == "left" else T
 
 
 def side_links(links, side: str):
     return tuple(mirror_link(link) for link in links) if side == "left" else tuple(links)
-
-
-def side_pad(p: TactilePad, side: str) -> TactilePad:
-    return mirror_pad(p) if side == "left" else p

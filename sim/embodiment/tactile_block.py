@@ -8,12 +8,14 @@ tactile layer checks blocks on their own with its own error class (``parse_tacti
 from __future__ import annotations
 
 import math
+import dataclasses
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
 from .fields import _Ctx, _expected_error, _is_number, _vec
+from .mirror import mirror_vec
 
 TACTILE_GROUPINGS = ("side_shared", "side_specific", "per_finger")
 TACTILE_NORMAL_CONVENTIONS = ("inward", "outward")
@@ -191,8 +193,6 @@ def parse_tactile_pad(raw, source=None, field: str = "pad", error: Callable = _e
 
 
 def _pad_is_mirror_symmetric(pad: TactilePad) -> bool:
-    from .mirror import mirror_vec  # late: mirror builds on this module
-
     return all(np.allclose(mirror_vec(v), v, atol=PAD_SYMMETRY_TOLERANCE_M, rtol=0)
                for v in (pad.center, pad.normal, pad.axis))
 
@@ -293,11 +293,13 @@ def parse_tactile_block(raw, source, link_names: set[str], fingers: list[str], f
     return _tactile_block(raw, _Ctx(source, field), set(link_names), list(fingers))
 
 
-def _tactile(data: dict, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
-    return _tactile_block(_get(data, "tactile", ctx), ctx.sub("tactile"), link_names, fingers)
-
-
-
 def hand_tactile(data: dict, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
     """The ``tactile`` block of a hand file's raw mapping (the schema has checked it is a mapping)."""
     return _tactile_block(data["tactile"], ctx.sub("tactile"), link_names, fingers)
+
+
+def side_pad(p: TactilePad, side: str) -> TactilePad:
+    """The pad as mounted on ``side``: pads are described for the right hand, mirrored for the left."""
+    if side != "left":
+        return p
+    return dataclasses.replace(p, center=mirror_vec(p.center), normal=mirror_vec(p.normal), axis=mirror_vec(p.axis))

@@ -12,7 +12,6 @@ their keyframes share the same steps, so the object is never pulled apart.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -21,10 +20,9 @@ from sim.embodiment.description import HandDescription, load_embodiment
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, quat, yawed)
+from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import place_centre, rest_centre
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 SIDE_SIGN = {"right": 1.0, "left": -1.0}    # which side of the object along the across axis each hand takes
 PALM_ROLL_DEG = 90.0          # palm down rolled about the fingers: the right palm faces -x, thumb up
@@ -75,7 +73,7 @@ def hand_rotation(side: str, a: np.ndarray) -> np.ndarray:
     return yawed(pitched, float(np.arctan2(a[1], a[0])) + SIDE_SIGN[side] * np.radians(TOE_IN_DEG))
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     name = item["carry"]
     task = op.scene.task
     obj = task.objects[name]

@@ -8,7 +8,6 @@ centre, opens and rises. Palm down keeps the arm in the configuration it already
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -19,16 +18,15 @@ from sim.errors import SpecError
 from sim.scene.sample import zone_centre
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
+from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import WALL
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 DRAG_INSET_M = 0.015          # curled fingertips this far inside the leading wall
 DRAG_SPEED_M_PER_STEP = 0.0025  # 0.15 m/s
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     obj = op.scene.task.objects[item["drag"]]
@@ -63,7 +61,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
     tl.add(DURATIONS["retreat"], pos=end + APPROACH_HEIGHT_M * UP)
 
 
-def wall_distance(op: ScriptedOperator, data: mujoco.MjData, body: int, point: np.ndarray, d: np.ndarray) -> float:
+def wall_distance(op: PlanningOperator, data: mujoco.MjData, body: int, point: np.ndarray, d: np.ndarray) -> float:
     """How far the container's own wall is from ``point`` (inside it) along ``d``: a ray against
     each of its geoms, so a round bowl and a box both come out exact."""
     model, hits = op.scene.model, []

@@ -15,7 +15,6 @@ operator looks at how the pourer now sits in the hand and turns it upright by th
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -24,11 +23,10 @@ from evaluation.geometry import axis_extent
 from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, TABLE_TARGET
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
+from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import grasp_and_lift, lower_and_release, place_centre, rest_centre
 from teleop.transit import CLEARANCE_M, hand_outline
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 FINGERS_PALM_DOWN = PALM_DOWN.T @ np.array([0.0, 1.0, 0.0])   # the fingers' direction, wrist-site frame
 PALM_NORMAL = PALM_DOWN.T @ np.array([0.0, 0.0, -1.0])         # out of the palm, wrist-site frame
@@ -47,7 +45,7 @@ def mouth_local(obj) -> np.ndarray:
     return axis * axis_extent(axis, obj.half_extents)
 
 
-def aim_point(op: ScriptedOperator, data: mujoco.MjData, name: str) -> np.ndarray:
+def aim_point(op: PlanningOperator, data: mujoco.MjData, name: str) -> np.ndarray:
     """Where (xy) the mouth goes: the target's origin (what `tilted_over` measures from), moved
     inside its cavity's walls when it has one, so that what is poured lands in it."""
     obj = op.scene.task.objects[name]
@@ -63,7 +61,7 @@ def aim_point(op: ScriptedOperator, data: mujoco.MjData, name: str) -> np.ndarra
     return (origin + R @ local)[:2]
 
 
-def point_world(op: ScriptedOperator, name: str) -> np.ndarray:
+def point_world(op: PlanningOperator, name: str) -> np.ndarray:
     """A task point in the world: its z is from the table top, as the evaluator resolves it
     (sim/tasks.py task_context: every task point is table-relative)."""
     return np.asarray(op.scene.task.points[name], float) + op.scene.table_height * UP
@@ -100,7 +98,7 @@ def tilt_turn(side: dict, hand_rot: np.ndarray, obj_rot: np.ndarray, axis_local:
     return best[1]
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     name, target = item["pour"], item["into"]
@@ -158,7 +156,7 @@ def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
                                                range(untilted + 1, len(tl.frames))))
 
 
-def upright_in_hand(op: ScriptedOperator, side: dict, name: str, axis_local: np.ndarray, hand_rot: np.ndarray,
+def upright_in_hand(op: PlanningOperator, side: dict, name: str, axis_local: np.ndarray, hand_rot: np.ndarray,
                     offset: np.ndarray, frames: range):
     """The look after the pourer is turned back: a bottle that turned in the grip while tipped (it
     does, held from the side) stands tilted in a hand turned back level, and set down so it falls

@@ -12,7 +12,6 @@ in the scene: no per-hand or per-task numbers.
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -20,9 +19,8 @@ import numpy as np
 from sim.embodiment.mirror import M
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
 from teleop.pinch_grasp import fingertip_rows, hand_kinematics
+from teleop.plan_steps.operator import PlanningOperator
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 FOLD_FRACTION = 0.9          # the fingers that do not point: this far towards their closed end
 PITCH_RANGE_DEG = (20.0, 80.0)   # candidate finger pitches (fingers down from horizontal)
@@ -113,7 +111,7 @@ def key_geometry(model: mujoco.MjModel, data: mujoco.MjData, name: str) -> tuple
     return point, press, abs(end - rest)
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     q, index, pitch = pointing(side["hand"])

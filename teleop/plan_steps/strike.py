@@ -11,17 +11,15 @@ the `pick` step's (teleop/plan_steps/pick_place.py).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from sim.physics import CONTROL_HZ
 from teleop.operator_motion import DURATIONS, SMOOTHSTEP_PEAK, UP, SideTimeline
+from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import carry_and_place, grasp_and_lift
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 STRIKE_RISE_M = 0.08          # the strike point this far above the target's top before the swing
 STRIKE_FOLLOW_M = 0.08        # ... aimed this far below it: contact comes mid-swing, at full speed
@@ -38,7 +36,7 @@ def strike_point(item: dict) -> np.ndarray:
     return np.asarray(item["strike_point"], float)
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     tool, target = item["tool"], item["strike"]

@@ -21,7 +21,6 @@ down in front of the bar the same way and push it back.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -30,9 +29,8 @@ from sim.embodiment.mirror import mirror_vec
 from sim.errors import SpecError
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, axis_rotation, quat
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
+from teleop.plan_steps.operator import PlanningOperator
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 TILTS_DEG = (45.0, 30.0, 15.0, 0.0)  # fingers tilted from the push direction towards the hinge: at first the tips
                                      # lead, under a lip; straighter later where the arm reaches no further
@@ -53,7 +51,7 @@ UPRIGHT_AXIS_COS = 0.5        # a hinge axis within 60 degrees of vertical is up
 EDGE_TOL_M = 0.01             # corners of the handle part this close to its farthest reach make up a free edge
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     link = Hinge(op.scene.model, data, item["turn"], op.scene.task.source)

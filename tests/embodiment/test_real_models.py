@@ -18,7 +18,8 @@ import sim.physics as physics
 from sim.embodiment import add_bimanual_robot, embodiment_names
 from sim.embodiment.description import load_embodiment
 from sim.embodiment.mirror import M
-from sim.embodiment.real_model import HAND_MODEL_ENV, MENAGERIE_ENV, RealModelError, load_model_spec
+from sim.embodiment.real_model import load_model_spec
+from sim.embodiment.real_model_file import HAND_MODEL_ENV, MENAGERIE_ENV, RealModelError
 from tactile.rig import TactileRig
 
 from catalog_files import edited_catalog_file
