@@ -20,6 +20,9 @@ from sim.scene.parts import parts_aabb
 
 TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
 PLAN_GRASPS = ("power", "pinch")
+# `pick` also takes flat_pinch: the fingertips to the table beside a thin object lying flat
+PICK_GRASPS = (*PLAN_GRASPS, "flat_pinch")
+PINCHES = ("pinch", "flat_pinch")      # grasps that find their own hold: no grasp_point
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
 HANDS = ("left", "right")
@@ -84,20 +87,24 @@ def _check_grasp(path, where: str, step: dict, grasps: tuple[str, ...] = PLAN_GR
         expected = f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]" if across else "degrees in [-180, 180]"
         raise SpecError(path, f"{where}.grasp_yaw", expected, yaw)
     _check_vector(path, where, step, "grasp_point", (3,), "[x, y, z] in the object's frame, metres")
-    if "grasp_point" in step and grasp == "pinch":
-        raise SpecError(path, f"{where}.grasp_point", "no grasp_point with grasp: pinch (the pinch finds its own)",
+    if "grasp_point" in step and grasp in PINCHES:
+        raise SpecError(path, f"{where}.grasp_point", f"no grasp_point with grasp: {grasp} (the pinch finds its own)",
                         step["grasp_point"])
+    if "approach_pitch_deg" in step and grasp == "flat_pinch":
+        raise SpecError(path, f"{where}.approach_pitch_deg", "no approach_pitch_deg with grasp: flat_pinch (the "
+                        "hand turns its fingertips down to the table itself)", step["approach_pitch_deg"])
 
 
 def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
     """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
     [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
     object down at; grasp_yaw turns the hand about the vertical (degrees, or "across" the object's
-    narrow side); grasp_point is where a power grasp closes, in the object's frame."""
+    narrow side); grasp_point is where a power grasp closes, in the object's frame; grasp: flat_pinch
+    picks a thin object lying flat with the fingertips (no grasp_point, no approach_pitch_deg)."""
     _check_object(path, where, step, "pick", scope.objects)
     _check_object(path, where, step, "place", scope.objects, extra=(TABLE_TARGET,))
     _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
-    _check_grasp(path, where, step)
+    _check_grasp(path, where, step, PICK_GRASPS)
 
 
 DRAG_HOOK_DEPTH_M = 0.02   # drag: curled fingertips this far below the container's rim

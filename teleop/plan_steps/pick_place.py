@@ -3,27 +3,28 @@
 Approach, descend, close, lift, carry, lower, open, retreat; palm down, or with the fingers pitched
 down (`approach_pitch_deg`), turned about the vertical (`grasp_yaw`). Where the object sits in the
 hand and how the hand closes come from the hand file's palm grasp (at the object's `grasp_point`), or,
-with `grasp: pinch`, from a pinch found from the hand's kinematics (teleop/pinch_grasp.py). Where
-the object goes comes from `place_offset`.
+with `grasp: pinch`, from a pinch found from the hand's kinematics (teleop/pinch_grasp.py), or with
+`grasp: flat_pinch`, from the fingertips' pinch for thin objects lying flat (teleop/flat_pinch.py).
+Where the object goes comes from `place_offset`.
 """
 
 from __future__ import annotations
 
 import functools
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from sim.demo_plan import GRASP_YAW_ACROSS, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
+from sim.scene.reach import PALM_DOWN
+from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yawed)
-from sim.scene.reach import PALM_DOWN
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
+from teleop.plan_steps.operator import PlanningOperator
+from teleop.transit import bounding_box_points, hand_outline
 
-if TYPE_CHECKING:
-    from teleop.scripted_operator import ScriptedOperator
 
 # Power grasp closure per actuator group (early, late), each 0 = open .. 1 = grasp target. Closing:
 # the early actuators (fingers) form a wall, then the late ones (thumb) press the object against it.
@@ -62,9 +63,62 @@ def level_pinch_pitch(hand_name: str) -> float:
 
 
 def grasp_kind(item: dict) -> str:
-    """A plan step's `grasp`: "power" (the hand's palm grasp, default) or "pinch" (thumb against the
-    first fingers' pads, for objects too small for the palm; teleop/pinch_grasp.py)."""
+    """A plan step's `grasp`: "power" (the hand's palm grasp, default), "pinch" (thumb against the
+    first fingers' pads, for objects too small for the palm; teleop/pinch_grasp.py) or "flat_pinch"
+    (the fingertips' pinch for a thin object lying flat: they come down to the table beside it;
+    teleop/flat_pinch.py). With flat_pinch, `grasp_yaw` in degrees is the direction the tips close
+    along (world, from +x); "across" or none: across the object's narrowest horizontal width."""
     return item.get("grasp", "power")
+
+
+# flat pinch: the hand's lowest point this far into the table top (the finger servos give; the tips stay
+# on it): 2 mm above it, 3 of 6 jigsaw pieces were lifted (stream path), 8 mm into it, 6 of 6
+FLAT_PINCH_PRESS_M = 0.008
+FLAT_PINCH_STAGES = 4     # flat pinch: closing in this many stages, the wrist following the lowest point down
+
+
+def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str):
+    """`grasp: flat_pinch` (teleop/flat_pinch.py): the hand turned so that the thumb's and the
+    fingers' tips are its lowest points, yawed (`grasp_yaw`) and spread across the object, comes down
+    until its lowest point presses onto the table beside the object, then closes in stages, the wrist
+    following the lowest point as the fingers curl so the tips stay on the table, as a person picks
+    up a key. Returns (hand rotation, pre-shape, object centre from the wrist, closing keyframes)."""
+    side = op.sides[item["hand"]]
+    hand, left = side["hand"], item["hand"] == "left"
+    obj = op.scene.task.objects[name]
+    body = op.scene.object_body_ids[name]
+    lo, hi = op.scene.model.actuator_ctrlrange[side["hand_ids"]].T
+    close = np.clip(tip_pinch(hand).close, lo, hi)
+    body_rot = data.xmat[body].reshape(3, 3)
+    mirror = mirror_vec if left else (lambda v: v)
+
+    def turned(q_turn: np.ndarray, q_axis: np.ndarray) -> np.ndarray:
+        """Tips at the bottom for shape ``q_turn``; yawed by the tips' axis at ``q_axis``."""
+        R = flat_pinch_rotation(hand, item["hand"], q_turn)
+        closing = R @ mirror(tip_axis(hand, q_axis))
+        if item.get("grasp_yaw", GRASP_YAW_ACROSS) == GRASP_YAW_ACROSS:
+            return yawed(R, across_turn(closing, body_rot, obj.half_extents))
+        # degrees: the direction the tips close along (world, from +x), either way round
+        turn = np.radians(item["grasp_yaw"]) - np.arctan2(closing[1], closing[0])
+        return yawed(R, float((turn + np.pi / 2) % np.pi - np.pi / 2))
+
+    # the object's centre goes where the tips are as far apart as it is wide (through its centre,
+    # along their axis): both sides touch it at once, rather than one pushing it across the table into
+    # the other; the shape and the width depend on each other: a first guess from the open hand
+    touch = side["open"]
+    for q_turn in (close, None):
+        hand_rot = turned(touch if q_turn is None else q_turn, touch)
+        width = width_along(op.scene.model, data, body, hand_rot @ mirror(tip_axis(hand, touch)))
+        touch, centre = tip_preshape(hand, side["open"], close, width)
+    ready, _ = tip_preshape(hand, side["open"], close, width + PINCH_SPREAD_MARGIN_M)
+    bottom = float(bounding_box_points(op.scene.model, data, body)[:, 2].min()) - FLAT_PINCH_PRESS_M
+    shapes = [ready + k / FLAT_PINCH_STAGES * (close - ready) for k in range(FLAT_PINCH_STAGES + 1)]
+    below = [float(-(hand_outline(hand, item["hand"], q) @ hand_rot.T)[:, 2].min()) for q in shapes]
+    obj_z = op.object_pos(data, name)[2]
+    offset = np.array([*(hand_rot @ mirror(centre))[:2], obj_z - (bottom + below[0])])
+    per = (DURATIONS["close"] + DURATIONS["close_late"]) // FLAT_PINCH_STAGES
+    closing = [(per, q, bottom + b) for q, b in zip(shapes[1:], below[1:])]
+    return hand_rot, ready, offset, closing
 
 
 def grasp_point(item: dict) -> np.ndarray:
@@ -87,6 +141,12 @@ def grasp_yaw(item: dict, hand_rot: np.ndarray, hand_name: str, body_rot: np.nda
         closing = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
     else:
         closing = hand_rot @ (PALM_DOWN.T @ FORWARD)
+    return across_turn(closing, body_rot, half_extents)
+
+
+def across_turn(closing: np.ndarray, body_rot: np.ndarray, half_extents) -> float:
+    """The smaller turn (radians, about the vertical) that sets the hand's ``closing`` direction
+    (world) across the object's narrowest horizontal width."""
     angles = np.radians(np.arange(0.0, 180.0))
     directions = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
     widths = np.abs(directions @ body_rot) @ np.asarray(half_extents, float)
@@ -95,7 +155,7 @@ def grasp_yaw(item: dict, hand_rot: np.ndarray, hand_name: str, body_rot: np.nda
     return float((turn + np.pi / 2) % np.pi - np.pi / 2)     # a closing direction has no sign
 
 
-def grasp_and_lift(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str,
+def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
                    roll_deg: float = 0.0) -> np.ndarray:
     """Append the hand's approach to object ``name``, descent, closing and lift (the step's `grasp`
     and `approach_pitch_deg`; ``roll_deg`` turns the hand about the fingers first, e.g. 90: a tall
@@ -116,16 +176,17 @@ def grasp_and_lift(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: 
     body_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3)
     if "grasp_yaw" in item:
         hand_rot = yawed(hand_rot, grasp_yaw(item, hand_rot, side["hand"], body_rot, obj.half_extents, pinch))
-    hand_quat = quat(hand_rot)
     open_ = side["open"]
-    if pinch:
+    if grasp_kind(item) == "flat_pinch":
+        hand_rot, ready, offset, closing = flat_pinch(op, data, item, name)
+    elif pinch:
         # come down with the pads spread wider than the object, its centre midway between them
         axis = pinch_axis_in_site_frame(side["hand"])
         axis = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
         width = 2.0 * float(np.abs(body_rot.T @ axis) @ obj.half_extents) + PINCH_SPREAD_MARGIN_M
         ready, centre = pinch_preshape(side["hand"], open_, side["pinch_close"], width)
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre)
-        closing = [(DURATIONS["close"] + DURATIONS["close_late"], side["pinch_close"])]
+        closing = [(DURATIONS["close"] + DURATIONS["close_late"], side["pinch_close"], None)]
     else:
         # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
         cx, cy, cz = side["grasp_centre"]
@@ -135,21 +196,25 @@ def grasp_and_lift(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: 
         # the palm clears the object's top, measured from the grasped point rather than its centre
         # the hand closes on the grasp point; the object's centre sits `at` back from it
         offset = hand_rot @ np.array([cx, max(cy, half_z - at[2] + PALM_CLEARANCE_M), cz]) - at
-        closing = [(DURATIONS["close"], op.power(side, WALL)), (DURATIONS["close_late"], op.power(side, CLOSED))]
+        closing = [(DURATIONS["close"], op.power(side, WALL), None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
         ready = open_
+    hand_quat = quat(hand_rot)
     grasp = op.object_pos(data, name) - offset
     reach = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)
     tl.add(DURATIONS["descend"], pos=grasp)
-    for duration, targets in closing:
-        tl.add(duration, hand=targets)
+    for duration, targets, wrist_z in closing:
+        if wrist_z is None:
+            tl.add(duration, hand=targets)
+        else:
+            tl.add(duration, hand=targets, pos=np.array([*grasp[:2], wrist_z]))
     tl.add(DURATIONS["hold"])
     tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * UP)
     op.look_again(side, name, data, reach, len(tl.frames))
     return offset
 
 
-def place_centre(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str) -> np.ndarray:
+def place_centre(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str) -> np.ndarray:
     """Where object ``name``'s centre is let go: over the step's `place` target at `place_offset`,
     the release gap above where it comes to rest."""
     task = op.scene.task
@@ -171,7 +236,7 @@ def rest_centre(release: np.ndarray) -> np.ndarray:
     return release - RELEASE_GAP_M * UP
 
 
-def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray,
+def lower_and_release(op: PlanningOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray,
                       rise_to: float = -np.inf) -> None:
     """From above ``place`` (the wrist position that lets object ``name`` go where it belongs):
     lower, open, retreat, then on up to wrist height ``rise_to``; before lowering, the operator
@@ -191,7 +256,7 @@ def lower_and_release(op: ScriptedOperator, item: dict, name: str, offset: np.nd
         tl.add(DURATIONS["lift"], pos=np.array([*tl.frames[-1].pos[:2], rise_to]))
 
 
-def carry_height(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> float:
+def carry_height(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> float:
     """The lowest wrist height at which the carried object ``name``'s bottom clears the top of the step's
     target by CARRY_CLEARANCE_M: a person lifts a thing over a tall bin's rim before moving it across."""
     if item["place"] == TABLE_TARGET:
@@ -201,7 +266,7 @@ def carry_height(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: st
     return float(top + CARRY_CLEARANCE_M + task.objects[name].half_extents[2] - offset[2])
 
 
-def carry_and_place(op: ScriptedOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> None:
+def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> None:
     """The held object ``name`` (its centre ``offset`` from the wrist) carried from where the hand is to
     the step's `place` at `place_offset`: up over the place's rim, across (over anything in the way),
     lowered and let go; the operator looks where the place is when the hand sets off. The second half
@@ -212,12 +277,44 @@ def carry_and_place(op: ScriptedOperator, data: mujoco.MjData, item: dict, name:
     lifted.pos = np.array([*lifted.pos[:2], max(lifted.pos[2], carry_height(op, data, item, name, offset))])
     place = place_centre(op, data, item, name) - offset
     op.leaves(name, rest_centre(place + offset), on=item["place"])
-    carry = len(tl.frames)
+    carry_frame = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
     lower_and_release(op, item, name, offset, place)
+    if grasp_kind(item) == "flat_pinch":
+        look_in_hand(op, data, side, name, offset, carry_frame)
     if item["place"] != TABLE_TARGET:
-        op.look_again(side, item["place"], data, carry, len(tl.frames))
+        op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
 
 
-def plan(op: ScriptedOperator, data: mujoco.MjData, item: dict) -> None:
+LIFTED_M = 0.02     # an object this far above where it lay has been picked up
+
+
+def look_in_hand(op: PlanningOperator, data: mujoco.MjData, side: dict, name: str, offset: np.ndarray,
+                 carry_frame: int) -> None:
+    """As the hand sets off with the object (frame ``carry_frame``), the operator looks where it sits
+    in the hand and moves the carry, lowering and release with it. A flat pinch's tips sweep a thin
+    object along the table before they hold it, so it sits centimetres from where the plan put it:
+    further than the check above the target (``lower_and_release``) trusts, which then takes the
+    plan's offset as the new one."""
+    tl: SideTimeline = side["timeline"]
+    end = len(tl.frames)
+    correction = side["corrections"][-1]
+
+    start_z = float(op.object_pos(data, name)[2])
+
+    def adjust(now: mujoco.MjData) -> None:
+        if op.object_pos(now, name)[2] < start_z + LIFTED_M:
+            return      # not in the hand: nothing to carry
+        # its height too: the tips, pressed onto the table, held it higher in the hand than planned
+        moved = op.object_pos(now, name) - now.site_xpos[side["wrist_site_id"]] - offset
+        for frame in tl.frames[carry_frame:end]:
+            frame.pos = frame.pos - moved
+        for i, entry in enumerate(side["corrections"]):
+            if entry is correction:
+                side["corrections"][i] = (correction[0], name, offset + moved, correction[3])
+
+    op.on_frame_end(side, carry_frame - 1, adjust)
+
+
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     carry_and_place(op, data, item, item["pick"], grasp_and_lift(op, data, item, item["pick"]))

@@ -1,0 +1,80 @@
+"""`grasp: flat_pinch`: the plan check refuses what it cannot use, the tip pinch found from the
+hand's kinematics, and a real lift of a 1.6 cm jigsaw piece off the table."""
+
+import pytest
+import yaml
+
+from sim import physics
+from sim.errors import SpecError
+from sim.registry import names
+from sim.scene.builder import build_scene
+from sim.scene.sample import demonstration_sample, task_seed
+from sim.tasks import load_task, parse_task
+from teleop.flat_pinch import flat_pinch_rotation, tip_pinch, tip_points, tip_preshape
+from teleop.pinch_grasp import MEET_M, hand_kinematics
+from teleop.recorder import home
+from teleop.scripted_operator import ScriptedOperator
+from teleop.transit import hand_outline
+
+TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
+PICK = {"hand": "right", "pick": "green_piece", "place": "table", "place_offset": [0.105, 0.12],
+        "grasp": "flat_pinch", "grasp_yaw": 90}
+
+
+def _raw(step: dict) -> dict:
+    raw = yaml.safe_load(load_task(TASK).source.read_text())
+    raw["demo_plan"] = [step]
+    return raw
+
+
+def test_flat_pinch_is_a_plan_grasp(tmp_path):
+    assert parse_task(_raw(dict(PICK)), tmp_path / "jigsaw.yaml").demo_plan[0]["grasp"] == "flat_pinch"
+
+
+@pytest.mark.parametrize(("field", "value", "expected"), [
+    ("grasp_point", [0.0, 0.0, 0.0], "no grasp_point with grasp: flat_pinch"),
+    ("approach_pitch_deg", 30, "no approach_pitch_deg with grasp: flat_pinch"),
+    ("grasp", "flat", "one of .*'flat_pinch'"),
+])
+def test_flat_pinch_refuses_what_it_cannot_use(tmp_path, field, value, expected):
+    with pytest.raises(SpecError, match=rf"jigsaw.yaml: field 'demo_plan\[0\].{field}'.*{expected}"):
+        parse_task(_raw({**PICK, field: value}), tmp_path / "jigsaw.yaml")
+
+
+@pytest.mark.parametrize("hand", ["sharpa", "orca"])
+def test_tip_pinch_brings_the_tips_together_at_the_bottom_of_the_hand(hand):
+    """The thumb's tip meets the fingers' tips; turned for the flat pinch, the spread hand's tips are
+    its lowest points (within a few millimetres: the tips are on the pads' side of the fingers' ends)."""
+    grasp = tip_pinch(hand)
+    assert grasp.gap_m <= MEET_M
+    kin = hand_kinematics(hand)
+    touch, _ = tip_preshape(hand, kin.home, grasp.close, 0.03)
+    R = flat_pinch_rotation(hand, "right", touch)
+    tips_z = (tip_points(hand, grasp.fingers, touch) @ R.T)[:, 2]
+    lowest = (hand_outline(hand, "right", touch) @ R.T)[:, 2].min()
+    assert tips_z.max() - lowest < 0.006
+
+
+def test_flat_pinch_lifts_a_jigsaw_piece():
+    """A 10 x 10 x 1.6 cm piece lying flat, lifted clear of the table (direct joint path, seed 0)."""
+    spec = load_task(TASK)
+    spec = type(spec)(**{**spec.__dict__, "demo_plan": [dict(PICK)]})
+    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    body = scene.object_body_ids["green_piece"]
+    z0, frames = data.xpos[body][2], op.sides["right"]["timeline"].frames
+    # the lift: the first rise of 10 cm after the approach (the hand comes down, closes, lifts)
+    lifted = next(f for prev, f in zip(frames[2:], frames[3:]) if f.pos[2] > prev.pos[2] + 0.1).end_step
+    for step in range(lifted):
+        physics.step_control(scene.model, data, op.act(step, data))
+    assert data.xpos[body][2] - z0 > 0.08
+
+
+def test_flat_pinch_is_for_pick_steps_only(tmp_path):
+    """A strike's tool is picked up with the grasps a strike was built with: no flat pinch."""
+    raw = _raw({"hand": "right", "strike": "white_piece", "tool": "green_piece", "strike_point": [0.0, 0.0, 0.0],
+                "place": "table", "place_offset": [0.1, 0.1], "grasp": "flat_pinch"})
+    with pytest.raises(SpecError, match=r"jigsaw.yaml: field 'demo_plan\[0\].grasp'.*\['power', 'pinch'\]"):
+        parse_task(raw, tmp_path / "jigsaw.yaml")
