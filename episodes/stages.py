@@ -100,7 +100,8 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
     else:
         stats = _render_parts(replay_path, profile, parts, out_path)
     return {"frames": int(len(steps)), "frame_errors": stats["errors"], "profile": profile.name,
-            "profile_hash": profile.content_hash, "workers": len(parts), "seconds": stats["seconds"]}
+            "profile_hash": profile.content_hash, "workers": len(parts), "seconds": stats["seconds"],
+            "frame_windows": stats["frame_windows"], "setup_cpu_s": stats["setup_cpu_s"]}
 
 
 MIN_FRAMES_PER_WORKER = 8    # below this, starting a process and a renderer costs more than it saves
@@ -109,7 +110,7 @@ MIN_FRAMES_PER_WORKER = 8    # below this, starting a process and a renderer cos
 def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, out_path: Path) -> dict:
     """Render the given control steps of a replay into one render file."""
     clock = time.perf_counter
-    t0 = clock()
+    t0, cpu0 = clock(), time.process_time()
     with h5py.File(replay_path, "r") as src:
         scene = scene_for(_RawView(src), replay_path)
         qpos = src["qpos"][int(steps[0]): int(steps[-1]) + 1]
@@ -124,6 +125,8 @@ def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, 
             writer.file.attrs.update({"schema": RENDER_SCHEMA, "profile": profile.name,
                                       "profile_hash": profile.content_hash})
             seconds["setup"] += clock() - t0     # the file's static datasets: once per file
+            setup_cpu = time.process_time() - cpu0   # this process's CPU seconds of the set-up (benchmarks)
+            first = time.time()     # wall clock shared by processes: when this part's frames start (benchmarks)
             for step in steps:
                 t0 = clock()
                 set_positions(model, data, qpos[step - steps[0]])
@@ -139,7 +142,8 @@ def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, 
         seconds["write"] += clock() - t0    # closing flushes the last chunks
     finally:
         renderer.close()
-    return {"errors": errors, "seconds": {**seconds, **renderer.seconds()}}
+    return {"errors": errors, "seconds": {**seconds, **renderer.seconds()}, "frame_windows": [(first, time.time())],
+            "setup_cpu_s": setup_cpu}
 
 
 def _render_parts(replay_path: Path, profile: SensorProfile, parts: list[np.ndarray], out_path: Path) -> dict:
@@ -152,7 +156,7 @@ def _render_parts(replay_path: Path, profile: SensorProfile, parts: list[np.ndar
         part_paths = [tmp / f"part{i:03d}.render.h5" for i in range(len(parts))]
         # spawn, not fork: a forked child would inherit the parent's GL context and h5py state
         with ProcessPoolExecutor(len(parts), mp_context=multiprocessing.get_context("spawn"),
-                                 initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+                                 initializer=_render_worker_start, initargs=(os.getpid(),)) as pool:
             stats = list(pool.map(_render_steps, [replay_path] * len(parts), [profile] * len(parts),
                                   parts, part_paths))
         t0 = time.perf_counter()
@@ -163,7 +167,20 @@ def _render_parts(replay_path: Path, profile: SensorProfile, parts: list[np.ndar
     for s in stats:
         for key, value in s["seconds"].items():
             seconds[key] = seconds.get(key, 0.0) + value
-    return {"errors": sum(s["errors"] for s in stats), "seconds": seconds}
+    return {"errors": sum(s["errors"] for s in stats), "seconds": seconds,
+            "frame_windows": [w for s in stats for w in s["frame_windows"]],
+            "setup_cpu_s": sum(s["setup_cpu_s"] for s in stats)}
+
+
+def _render_worker_start(parent_pid: int) -> None:
+    """Pool initializer of a render worker: one worker is meant for one core, so unless told otherwise
+    Mesa's software GL rasterizes on the worker's own thread (its default, a thread per core in every
+    worker, oversubscribes the cores) and OpenCV uses one thread. Neither changes a byte."""
+    import cv2
+
+    die_with_parent(parent_pid)
+    os.environ.setdefault("LP_NUM_THREADS", "0")     # read when the worker makes its GL context, after this
+    cv2.setNumThreads(1)
 
 
 class _RawView:

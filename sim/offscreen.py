@@ -26,6 +26,14 @@ draws only the geoms that can reach a pixel, which leaves every output byte as i
   (skybox and haze test against the same depth buffer). Not used with transparency, reflective
   geoms, planes seen from behind, wireframe, multisampling, shadows or reflections, where it would
   not hold.
+At a coarse tessellation (a profile's `tessellation`, e.g. (8, 4)) a pass costs ~2.7x less and what is left
+is mostly per geom drawn (~25-35 us a geom a pass in llvmpipe, whatever its triangles), then clearing and the
+skybox. Measured alternatives that did not win (issue 22): Embree ray casting of the same primitives for
+depth and ids (embreex, 128x96 preview cameras: rays alone cost more than the GL id pass at (8, 4), and the
+scene must be rebuilt every frame, as embreex has no instancing); OSMesa instead of EGL (same bytes, same
+time). Not tried: one framebuffer with a viewport per camera, which could save only the read-backs (~0.1 ms
+a 128x96 pass): an id pass with no geom costs ~0.01 ms, a colour pass ~0.5 ms of skybox that each viewport
+would still draw.
 Geom records are moved in the scene's own buffer (a numpy view checked against the bindings' field
 views when the renderer is made; without a match the renderer draws every geom) and put back after
 each render, keeping their segmentation ids, so segment colours do not change.

@@ -19,3 +19,10 @@ def test_replay_bench_parts_add_up_and_setup_is_reported_apart():
     # each label has its own share (preview lists box2d, box3d and occupancy; box2d needs the masks)
     assert {"render_labels_segmentation", "render_labels_box2d", "render_labels_box3d",
             "render_labels_occupancy"} <= share.keys() and "render_labels" not in share
+    # issue 22: CPU-time figures (robust to other processes on the cores) and, as preview sets its own
+    # tessellation, the same cameras at MuJoCo's default measured in the same run
+    assert out["frames_per_cpu_second"] > 0 and out["load_average_1min"] >= 0
+    versus = out["tessellation_vs_mujoco_default"]
+    assert versus["tessellation"] == [8, 4] and versus["mujoco_default"] == [28, 16]
+    assert versus["camera_cpu_ms_per_frame"] > 0 and versus["camera_cpu_ms_per_frame_mujoco_default"] > 0
+    assert 0 < versus["rgb_pixels_changed"] < 0.5 and 0 <= versus["depth_pixels_changed_over_2mm"] < 0.5

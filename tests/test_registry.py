@@ -43,7 +43,8 @@ def test_a_profile_tessellation_is_two_small_integers_named_on_error():
     from sim.errors import SpecError
     from sim.registry import parse_sensor_profile, sensor_profile
 
-    assert sensor_profile("policy_tiny").tessellation == (8, 4) and sensor_profile("preview").tessellation is None
+    assert sensor_profile("policy_tiny").tessellation == sensor_profile("preview").tessellation == (8, 4)
+    assert sensor_profile("paper").tessellation == (16, 8) and sensor_profile("policy_paper").tessellation is None
     base = {"name": "t", "rate_hz": 20, "cameras": {"ids": ["chest"], "width": 8, "height": 6}}
     for bad in ([8], [8, 2], [8.0, 4], "8x4", [True, 4]):
         with pytest.raises(SpecError, match="cameras.tessellation"):

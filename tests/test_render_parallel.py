@@ -51,6 +51,8 @@ def test_two_workers_render_the_same_arrays_as_one(replay_path, tmp_path):
     two = render_to_file(replay_path, profile, tmp_path / "two.render.h5", workers=2)
     assert (one["workers"], two["workers"]) == (1, 2)
     assert one["frames"] == two["frames"] == 18
+    # issue 22: each worker's frames and set-up are timed for the bench
+    assert len(one["frame_windows"]) == 1 and len(two["frame_windows"]) == 2 and two["setup_cpu_s"] > 0
     a, b = _arrays(tmp_path / "one.render.h5"), _arrays(tmp_path / "two.render.h5")
     assert a.keys() == b.keys()
     assert "cameras/chest/rgb" in a and "robot/tactile/tacmap/right_index_tip" in a

@@ -227,3 +227,29 @@ def test_renderer_dropped_without_close_leaves_others_intact(scene_states):
     before.close()
     rig.close()
     rig.close()                                                 # closing twice is harmless
+
+
+def test_a_profile_tessellation_is_the_one_its_rig_draws_with(scene_states):
+    """Issue 22: preview (like policy_tiny) draws primitives at (8, 4) slices/stacks. Rigs of one profile
+    give the same bytes whatever rig of another tessellation was made on the model between them, and the
+    coarse images differ from MuJoCo's default ones (the profile's hash says so)."""
+    from sim.registry import sensor_profile
+
+    scene, data, states = scene_states
+    model = scene.model
+    set_positions(model, data, states[1])
+    cams = ["stereo_left", "left_wrist"]
+    coarse_raw = {**_profile(64, 48, cameras=cams).raw}
+    coarse_raw["cameras"] = {**coarse_raw["cameras"], "tessellation": [8, 4]}
+    coarse = parse_sensor_profile(coarse_raw)
+    default = _profile(64, 48, cameras=cams)
+    assert coarse.content_hash != default.content_hash and sensor_profile("preview").tessellation == (8, 4)
+    shots = []
+    for profile in (coarse, default, coarse, default):
+        rig = CameraRig(model, profile, segments=True)
+        try:
+            shots.append(rig.capture(data))
+        finally:
+            rig.close()
+    assert _same(shots[0], shots[2]) and _same(shots[1], shots[3])
+    assert not any(shots[0][c]["rgb"].tobytes() == shots[1][c]["rgb"].tobytes() for c in cams)

@@ -26,7 +26,7 @@ from sim.labels.occupancy import OccupancyLabeler
 from sim.labels.segmentation import Segmenter
 from sim.offscreen import OffscreenRenderer
 from sim.registry import SensorProfile, names, sensor_profile
-from sim.render import apply_antialias
+from sim.render import apply_antialias, apply_tessellation
 from sim.scene.builder import demonstration_scene
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
@@ -49,6 +49,7 @@ def run_bench(profile: str | SensorProfile = "paper", frames: int = 10, task: st
     seconds = dict.fromkeys(CAMERA_KEYS + ("box3d", "occupancy"), 0.0)
     clock = time.perf_counter
     apply_antialias(model, profile)     # as the render stage's camera rig
+    apply_tessellation(model, profile)
     renderer = OffscreenRenderer(model, profile.width, profile.height)
     try:
         for _ in range(frames):
