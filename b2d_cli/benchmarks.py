@@ -14,6 +14,7 @@ import numpy as np
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
 from sim import physics
 from sim.registry import names, sensor_profile
+from sim.render import MUJOCO_TESSELLATION
 from sim.scene.builder import demonstration_scene
 from sim.scene.state import SceneObserver
 from sim.tasks import load_task
@@ -27,6 +28,15 @@ TACTILE_BENCH_MIN_STEPS = 480  # long enough for the scripted operator's first g
 
 def _scene():
     return demonstration_scene(TASK, EMBODIMENT)
+
+
+def _stream_inputs(scene, data, steps: int) -> list:
+    """The scripted person's stream input of each step (frame and clock), as a stream recording keeps it."""
+    from teleop.scripted_stream import ScriptedStreamOperator
+
+    op = ScriptedStreamOperator()
+    op.reset(scene, data)
+    return [(op.act(t, data), op.stream_step)[1] for t in range(steps)]
 
 
 def bench_recorder(steps: int) -> dict:
@@ -46,9 +56,12 @@ def bench_recorder(steps: int) -> dict:
     op = ScriptedOperator()
     op.reset(scene, data)
     actions = [op.act(t, data) for t in range(steps)]        # operator cost is not the recorder's
+    streams = _stream_inputs(scene, data, steps)              # a stream operator's per-step input
     observer = SceneObserver(scene)
     evaluator = EpisodeEvaluator(scene.task.metrics, observer.context)
     buf = new_buffer(scene, len(evaluator.stage_ids))
+    stream_buf = new_buffer(scene, len(evaluator.stage_ids), stream=True)
+    stream_store_s = []
     clock = time.thread_time
     tick = min(-clock() + clock() for _ in range(1000))      # an empty interval: the clock's own cost
     control_s, mj_step_s, snapshot_s, store_s, evaluator_s = [], [], [], [], []
@@ -68,14 +81,23 @@ def bench_recorder(steps: int) -> dict:
         t2 = clock()
         record = evaluator.update(state, physics.CONTROL_DT)
         t3 = clock()
+        if t % 2:       # the same step also into a buffer with the stream's rows, first on every other step
+            t5 = clock()
+            store_step(observer, stream_buf, data, actions[t], record, stream=streams[t])
+            stream_store_s.append(clock() - t5 - tick)
+        t6 = clock()
         store_step(observer, buf, data, actions[t], record)
         t4 = clock()
+        if t % 2 == 0:
+            t5 = clock()
+            store_step(observer, stream_buf, data, actions[t], record, stream=streams[t])
+            stream_store_s.append(clock() - t5 - tick)
         snapshot_s.append(t2 - t1 - tick)
         evaluator_s.append(t3 - t2 - tick)
-        store_s.append(t4 - t3 - tick)
+        store_s.append(t4 - t6 - tick)
     parts = {"physics_control_step": control_s, "physics_mj_step": mj_step_s, "recording": store_s,
              "evaluation": np.add(snapshot_s, evaluator_s), "evaluation_snapshot": snapshot_s,
-             "evaluation_update": evaluator_s}
+             "evaluation_update": evaluator_s, "recording_with_stream": stream_store_s}
     mean = {k: 1e3 * float(np.mean(v)) for k, v in parts.items()}
     median = {k: 1e3 * float(np.median(v)) for k, v in parts.items()}
     recording, control, evaluation = mean["recording"], mean["physics_control_step"], mean["evaluation"]
@@ -85,6 +107,8 @@ def bench_recorder(steps: int) -> dict:
         "median_ms_per_control_step": {k: round(v, 4) for k, v in median.items()},
         "recording_vs_control_step": round(recording / control, 4),
         "recording_vs_mj_step": round(recording / mean["physics_mj_step"], 4),
+        "recording_with_stream_vs_recording": round(mean["recording_with_stream"] / recording, 4),
+        "recording_with_stream_vs_control_step": round(mean["recording_with_stream"] / control, 4),
         "evaluation_vs_control_step": round(evaluation / control, 4),
         "recording_plus_evaluation_vs_control_step": round((recording + evaluation) / control, 4),
         "load_average_1min": round(os.getloadavg()[0], 2),
@@ -118,22 +142,33 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
         cpu0 = time.process_time()      # every thread of this process
         t0 = clock()
         replay_to_file(raw, tmp / "e.replay.h5")
-        t1 = clock()
+        t1, r0 = clock(), _cpu_with_children()
         info = render_to_file(tmp / "e.replay.h5", profile, tmp / "e.render.h5")
-        t2 = clock()
+        t2, render_cpu = clock(), _cpu_with_children() - r0
         out = assemble_episode(tmp / "e.replay.h5", tmp / "e.render.h5", profile, tmp / "episode_e.hdf5")
         t3 = clock()
         cpu = time.process_time() - cpu0
         stored = _bytes_by_modality(tmp / "episode_e.hdf5")
         parallel = {}
         if workers > 1:
-            w0 = clock()
+            w0, r0 = clock(), _cpu_with_children()
             more = render_to_file(tmp / "e.replay.h5", profile, tmp / "w.render.h5", workers=workers)
-            wall = clock() - w0
+            wall, more_cpu = clock() - w0, _cpu_with_children() - r0
             parallel = {"workers": more["workers"], "render_wall_s": round(wall, 3),
-                        "note": "worker processes keep OpenCV's default threads; llvmpipe's follow LP_NUM_THREADS",
                         "render_wall_s_one_worker": round(t2 - t1, 3),
-                        "speedup_vs_one_worker": round((t2 - t1) / wall, 3)}
+                        "speedup_vs_one_worker": round((t2 - t1) / wall, 3),
+                        "frames_speedup_vs_one_worker": round(_frame_span(info) / _frame_span(more), 3),
+                        # CPU seconds of the whole render (every process): what splitting adds, and the
+                        # speed-up it leaves on idle cores (workers x one worker's CPU / all workers' CPU)
+                        "render_cpu_s": round(more_cpu, 3), "render_cpu_s_one_worker": round(render_cpu, 3),
+                        "speedup_bound_from_cpu": round(more["workers"] * render_cpu / max(more_cpu, 1e-9), 3),
+                        "note": ("speedup_vs_one_worker: the whole render call, each worker's start (process, imports "
+                                 "~1.9 s CPU, scene and renderer ~1.2 s) and the join included; frames_speedup_vs_one_worker: from the "
+                                 "first frame any worker starts to the last one any worker ends, against one worker's "
+                                 "frames (a steady stream of episodes, where start-up is paid once per worker); "
+                                 "each worker runs llvmpipe on its own thread (unless LP_NUM_THREADS says otherwise) "
+                                 "and OpenCV on one")}
+        comparison = _tessellation_comparison(tmp / "e.replay.h5", profile) if profile.tessellation else {}
     frames, total = info["frames"], t3 - t0
     seconds = dict(info["seconds"])
     setup = seconds.pop("setup", 0.0)       # once per render file: reported apart, not spread over frames
@@ -148,6 +183,9 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
             "shadows": profile.shadows, "antialias": profile.antialias,
             "frames_per_second_per_core": round(frames / per_frame, 3),
             "frames_per_second_per_core_with_setup": round(frames / total, 3),
+            # the same from this process's CPU time: what a frame costs a core even when other processes
+            # share the cores (wall-clock figures then count their time too)
+            "frames_per_cpu_second": round(frames / max(cpu - info["setup_cpu_s"], 1e-9), 3),
             "seconds": round(total, 3),
             "cpu_seconds_per_wall_second": round(cpu / total, 3),
             "llvmpipe_threads": os.environ.get("LP_NUM_THREADS", "one per core (Mesa's default)"),
@@ -160,6 +198,8 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
             "bytes_per_frame_on_disk": round(out["bytes"] / max(frames, 1)),
             "bytes_per_frame_by_modality": {k: round(v / max(frames, 1)) for k, v in stored.items()},
             **({"parallel_render": parallel} if parallel else {}),
+            **({"tessellation_vs_mujoco_default": comparison} if comparison else {}),
+            "load_average_1min": round(os.getloadavg()[0], 2),
             "note": (f"scripted {TASK} on {EMBODIMENT}, one core (cpu_seconds_per_wall_second ~1: no other thread "
                      "worked; llvmpipe_threads 0 = software GL on the calling thread); shares and ms_per_frame are the run's time "
                      "less the render set-up, so the replay's and the assembly's own one-off costs (scene build, "
@@ -168,6 +208,69 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
                      "_with_setup figures; unavoidable = the GL render and read-back of each camera pass and "
                      "tactile ray casting; camera_decode (GL buffers -> metric depth and geom ids) is CPU work "
                      "counted as overhead; physics_replay includes the evaluator")}
+
+
+def _cpu_with_children() -> float:
+    """CPU seconds of this process and of its ended child processes (render workers)."""
+    import resource
+
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + children.ru_utime + children.ru_stime
+
+
+def _frame_span(info: dict) -> float:
+    """Wall seconds from the first frame any worker of a render started to the last one ended."""
+    windows = info["frame_windows"]
+    return max(end for _, end in windows) - min(start for start, _ in windows)
+
+
+def _tessellation_comparison(replay_path: Path, profile) -> dict:
+    """The cameras of a profile that sets its own tessellation against the same profile at MuJoCo's default
+    (what it rendered before it had one), frame by frame on the same poses, alternating (so both see the
+    same load): this thread's CPU time per frame and the share of pixels that differ."""
+    import dataclasses
+
+    import h5py
+    import mujoco
+
+    from episodes.stages import _RawView, frame_steps
+    from sim.render import CameraRig, set_positions
+    from sim.replay import scene_for
+
+    with h5py.File(replay_path, "r") as src:
+        scene = scene_for(_RawView(src), replay_path)
+        qpos = src["qpos"][()]
+    model, data = scene.model, mujoco.MjData(scene.model)
+    default = dataclasses.replace(profile, tessellation=None)
+    rigs = {"profile": CameraRig(model, profile), "mujoco_default": CameraRig(model, default)}
+    cpu = {k: 0.0 for k in rigs}
+    rgb_changed, depth_changed = [], []
+    try:
+        for step in frame_steps(len(qpos), profile.rate_hz):
+            set_positions(model, data, qpos[step])
+            shots = {}
+            for name, rig in rigs.items():
+                t0 = time.thread_time()
+                shots[name] = rig.capture(data)
+                cpu[name] += time.thread_time() - t0
+            for cam, shot in shots["profile"].items():
+                ref = shots["mujoco_default"][cam]
+                if "rgb" in shot:
+                    rgb_changed.append(float((shot["rgb"] != ref["rgb"]).any(axis=-1).mean()))
+                if "depth_m" in shot:
+                    depth_changed.append(float((np.abs(shot["depth_m"] - ref["depth_m"]) > 0.002).mean()))
+        frames = len(frame_steps(len(qpos), profile.rate_hz))
+    finally:
+        for rig in rigs.values():
+            rig.close()
+    return {"tessellation": list(profile.tessellation), "mujoco_default": list(MUJOCO_TESSELLATION),
+            "camera_cpu_ms_per_frame": round(1e3 * cpu["profile"] / frames, 3),
+            "camera_cpu_ms_per_frame_mujoco_default": round(1e3 * cpu["mujoco_default"] / frames, 3),
+            "camera_speedup": round(cpu["mujoco_default"] / max(cpu["profile"], 1e-9), 3),
+            "rgb_pixels_changed": round(float(np.mean(rgb_changed)), 4) if rgb_changed else None,
+            "depth_pixels_changed_over_2mm": round(float(np.mean(depth_changed)), 4) if depth_changed else None,
+            "note": "every camera of every frame rendered both ways in turn; CPU time of this thread (all of the "
+                    "GL work when LP_NUM_THREADS=0, as b2d bench sets it)"}
 
 
 # Render parts that are the sensors' own work (everything else is overhead the factory adds).

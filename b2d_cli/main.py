@@ -14,6 +14,7 @@ from b2d_cli import errors as cli_errors
 from b2d_cli.media_cmd import export, show
 from b2d_cli.lerobot_cmd import lerobot as lerobot_export_cmd
 from b2d_cli.policy_cmd import eval_cmd, train
+from b2d_cli.retarget_cmd import retarget
 from b2d_cli.tables_cmd import tables
 from b2d_cli.serve_cmd import layout, serve
 from b2d_cli.tactile_cmd import tactile
@@ -324,6 +325,7 @@ cli.add_command(show)
 cli.add_command(tactile)
 cli.add_command(tasks)
 cli.add_command(teleop)
+cli.add_command(retarget)
 cli.add_command(train)
 cli.add_command(eval_cmd)
 cli.add_command(tables)

@@ -9,6 +9,14 @@ Per step, ``step_flags`` holds the operator stream's ``StepFlag`` bits (teleop/s
 dropped or out-of-order frames, non-finite keypoints, bad or unreachable wrist poses; 0 = clean) and
 the optional ``step_reasons`` dataset the same steps' reasons as text, one per line ("" = clean).
 Files written before ``step_reasons`` existed read with every reason "".
+
+Recordings driven by an operator stream (``b2d record --operator stream``, ``b2d teleop``) also keep
+that stream in the optional ``operator_stream`` group (``OperatorStreamRecord``): per control step the
+frame that reached the sanitizer (``arrived`` False: none did), both hands' keypoints in the stream's
+wrist frame, wrist poses, their validity, and the step's time on the stream's clock, plus as a JSON
+attribute the settings that turned it into commands (sanitizer period, translation scale, DexPilot
+configuration). `b2d retarget` feeds it through another embodiment's retargeting. Files without the
+group (the direct joint path, files written before it existed) read with ``stream = None``.
 """
 
 from __future__ import annotations
@@ -23,10 +31,49 @@ import h5py
 import numpy as np
 
 from episodes.atomic import atomic_path
+from sim.embodiment.retarget_spec import MEDIAPIPE_KEYPOINTS
 from sim.errors import SpecError
 
 RAW_SCHEMA = "b2d.raw/1"
 RAW_NAME = re.compile(r"episode_(\d+)\.raw\.h5")
+
+
+STREAM = "operator_stream"     # optional group
+# per-step stream datasets: name -> (shape after T, accepted dtype kind, dtype written)
+STREAM_FIELDS = {
+    "arrived": ((), "b", np.bool_),                                    # a frame reached the sanitizer
+    "timestamp_ns": ((), "i", np.int64),                               # its timestamp (stream clock)
+    "keypoints": ((2, len(MEDIAPIPE_KEYPOINTS), 3), "f", np.float64),  # left, right; wrist frame, as arrived
+    "wrist_pos": ((2, 3), "f", np.float64),                            # tracker frame
+    "wrist_quat": ((2, 4), "f", np.float64),                           # w x y z
+    "keypoints_valid": ((2,), "b", np.bool_),
+    "wrist_valid": ((2,), "b", np.bool_),
+    "clock_ns": ((), "i", np.int64),         # the step's time on the stream's clock, given to the sanitizer
+    "clock_known": ((), "b", np.bool_),      # False: no clock yet (a live device before its first frame)
+}
+STREAM_SETTINGS = "settings"     # JSON attribute of the group
+STREAM_SETTING_KEYS = {"nominal_period_ns": (int, type(None)), "translation_scale": (int, float), "retarget": (dict,)}
+
+
+@dataclass
+class OperatorStreamRecord:
+    """The operator stream that produced a recording's actions, one row per control step (frames are
+    stored as they arrived, bad ones included, so the sanitizer decides the same way again)."""
+
+    arrived: np.ndarray
+    timestamp_ns: np.ndarray
+    keypoints: np.ndarray
+    wrist_pos: np.ndarray
+    wrist_quat: np.ndarray
+    keypoints_valid: np.ndarray
+    wrist_valid: np.ndarray
+    clock_ns: np.ndarray
+    clock_known: np.ndarray
+    settings: dict      # {"nominal_period_ns": int | None, "translation_scale": float, "retarget": {DexPilot}}
+
+    @property
+    def num_steps(self) -> int:
+        return int(self.arrived.shape[0])
 
 
 @dataclass
@@ -55,6 +102,7 @@ class RawRecording:
     extra: dict = field(default_factory=dict)
     step_reasons: list[str] = field(default_factory=list)   # [T] why a step was flagged ("" = clean)
     hand_model: str = "generated"     # which hand geometry the scene was built with (replay rebuilds it)
+    stream: OperatorStreamRecord | None = None   # the operator stream behind the actions, when there was one
 
     @property
     def num_steps(self) -> int:
@@ -122,6 +170,12 @@ def write_raw(path: str | Path, rec: RawRecording) -> Path:
         reasons = rec.step_reasons or [""] * rec.num_steps
         f.create_dataset(REASONS, data=np.array(reasons, dtype=h5py.string_dtype()), compression="gzip",
                          compression_opts=4)
+        if rec.stream is not None:
+            group = f.create_group(STREAM)
+            group.attrs[STREAM_SETTINGS] = json.dumps(rec.stream.settings, sort_keys=True)
+            for key, (_, _, dtype) in STREAM_FIELDS.items():
+                group.create_dataset(key, data=np.asarray(getattr(rec.stream, key), dtype=dtype),
+                                     compression="gzip", compression_opts=4)
     try:
         with atomic_path(path) as tmp:
             tmp.write_bytes(image.getbuffer())
@@ -168,7 +222,45 @@ def _read_values(path: Path, f: h5py.File) -> dict:
             raise SpecError(path, REASONS, "a readable dataset of UTF-8 strings [T]") from exc
     else:
         values[REASONS] = [""] * len(values["action"])
+    values["stream"] = _read_stream(path, f) if STREAM in f else None
     return values
+
+
+def _read_stream(path: Path, f: h5py.File) -> OperatorStreamRecord:
+    group = f[STREAM]
+    if not isinstance(group, h5py.Group):
+        raise SpecError(path, STREAM, "a group of per-step operator stream datasets", f"a {type(group).__name__}")
+    values = {}
+    for key, (shape, kind, dtype) in STREAM_FIELDS.items():
+        where = f"{STREAM}/{key}"
+        if key not in group or not isinstance(group[key], h5py.Dataset):
+            raise SpecError(path, where, f"a dataset of shape {('T', *shape)} (one row per control step)")
+        try:
+            values[key] = group[key][()]
+        except (OSError, ValueError, TypeError) as exc:
+            raise SpecError(path, where, "readable data (file is truncated or corrupt)") from exc
+        if np.asarray(values[key]).dtype.kind != kind:
+            raise SpecError(path, where, f"a dataset of dtype {np.dtype(dtype).name}",
+                            str(np.asarray(values[key]).dtype))
+    if STREAM_SETTINGS not in group.attrs:
+        raise SpecError(path, f"{STREAM}/{STREAM_SETTINGS}",
+                        "a JSON object attribute (sanitizer and retargeting settings)")
+    try:
+        settings = _json_attr(path, group, STREAM_SETTINGS, "", dict)
+    except SpecError as exc:       # name the attribute with its group
+        raise SpecError(path, f"{STREAM}/{STREAM_SETTINGS}", exc.expected) from None
+    for key, types in STREAM_SETTING_KEYS.items():
+        value = settings.get(key, ...)
+        if not isinstance(value, types) or isinstance(value, bool):
+            raise SpecError(path, f"{STREAM}/{STREAM_SETTINGS}", f"a JSON object with '{key}' of type "
+                            f"{' or '.join(t.__name__ for t in types)}", settings.get(key))
+    anchors = settings.get("wrist_anchors", {})       # optional: preset wrist anchors (b2d retarget --wrist world)
+    if not (isinstance(anchors, dict) and set(anchors) <= {"left", "right"} and all(
+            isinstance(v, list) and len(v) == 7 and all(isinstance(x, (int, float)) and np.isfinite(x) for x in v)
+            for v in anchors.values())):
+        raise SpecError(path, f"{STREAM}/{STREAM_SETTINGS}", "'wrist_anchors', when given, as {side: [x, y, z, qw, "
+                        "qx, qy, qz]} for sides left and right", anchors)
+    return OperatorStreamRecord(**values, settings=settings)
 
 
 def read_raw(path: str | Path) -> RawRecording:
@@ -220,3 +312,8 @@ def _check_consistency(path: Path, rec: RawRecording) -> None:
         raise SpecError(path, "step_flags", "dtype uint8 (StepFlag bits)", str(rec.step_flags.dtype))
     if len(rec.step_reasons) != T:
         raise SpecError(path, REASONS, f"{T} strings (one per step)", len(rec.step_reasons))
+    if rec.stream is not None:
+        for key, (shape, _, _) in STREAM_FIELDS.items():
+            got = np.shape(getattr(rec.stream, key))
+            if got != (T, *shape):
+                raise SpecError(path, f"{STREAM}/{key}", f"shape {(T, *shape)} (one row per control step)", got)

@@ -56,6 +56,7 @@ import numpy as np
 from sim import physics
 from sim.embodiment.description import Transform, quat_to_mat
 from sim.scene.builder import Scene
+from teleop.recorder import StreamStep, stream_settings
 from teleop.retarget import DexPilotConfig, HandKinematics, TeleopCommander
 from teleop.scripted_operator import ScriptedOperator
 from teleop.streams import OperatorFrame, StreamSanitizer
@@ -167,9 +168,15 @@ class ScriptedStreamOperator:
         self._shown[side], self._sent[side] = np.asarray(hand_q, float).copy(), want
         return want if prev_kp is None else prev_kp + (want - prev_kp) / cfg.keypoint_alpha
 
+    @property
+    def stream_settings(self) -> dict:
+        """The recorder keeps the stream with these (``teleop/recorder.py``)."""
+        return stream_settings(NOMINAL_PERIOD_NS, 1.0, self.retarget_config)
+
     def act(self, step: int, data: mujoco.MjData) -> np.ndarray:
         now = session_time_ns(step)
-        cmd = self.commander.command(self.sanitizer.step(self.frame(step, data), now))
+        self.stream_step = StreamStep(self.frame(step, data), now)
+        cmd = self.commander.command(self.sanitizer.step(*self.stream_step))
         self.step_flags, self.step_reasons = int(cmd.flags), "\n".join(cmd.reasons)
         return cmd.ctrl
 

@@ -142,7 +142,8 @@ class TeleopSession:
         if self.episode is not None:
             return False, self._open()
         self._home()
-        self.episode, self.recording, self.ended_by = EpisodeRecording(self.scene, self.data), True, None
+        self.episode = EpisodeRecording(self.scene, self.data, stream_settings=self.driver.stream_settings)
+        self.recording, self.ended_by = True, None
         self._latched = np.zeros(len(self.episode.evaluator.stage_ids), bool)
         return True, f"home; recording episode {self.episode_id} (seed {self.seed})"
 
@@ -206,7 +207,8 @@ class TeleopSession:
         cmd = self.driver.command(session_time_ns(self.step_count))
         physics.step_control(self.scene.model, self.data, cmd.ctrl)
         if self.episode is not None and self.recording:
-            record = self.episode.step(self.data, cmd.ctrl, int(cmd.flags), "\n".join(cmd.reasons))
+            record = self.episode.step(self.data, cmd.ctrl, int(cmd.flags), "\n".join(cmd.reasons),
+                                       stream=self.driver.last_step)
             for k in np.flatnonzero(record.stage_latched & ~self._latched):
                 self.say(f"stage '{self.episode.evaluator.stage_ids[k]}' done at step {self.episode.steps - 1}")
             self._latched = record.stage_latched.copy()

@@ -8,7 +8,10 @@ clock is related to the session's by the arrival time of its newest frame, so th
 tell a slow stream from a lost frame.
 
 ``StreamOperator`` wraps the driver in the recorder's ``Operator`` protocol (flags included), so
-``record_episode`` records a stream exactly as the scripted operator's demonstrations.
+``record_episode`` records a stream exactly as the scripted operator's demonstrations. Each step's
+input (``last_step``: the frame polled, or None, and the stream-clock time) is what the recorder
+keeps as the recording's operator stream; ``command_for`` runs the same sanitizer and commander on
+such an input, which is how `b2d retarget` (``teleop/retarget_demo.py``) replays a recorded one.
 """
 
 from __future__ import annotations
@@ -18,8 +21,9 @@ import numpy as np
 
 from sim import physics
 from sim.scene.builder import Scene
-from teleop.retarget import Command, TeleopCommander
-from teleop.streams import StreamSanitizer
+from teleop.recorder import StreamStep, stream_settings
+from teleop.retarget import Command, DexPilotConfig, TeleopCommander
+from teleop.streams import OperatorFrame, StreamSanitizer
 
 from .session_inputs import SessionInput
 
@@ -32,9 +36,12 @@ def session_time_ns(step: int) -> int:
 
 
 class StreamDriver:
-    def __init__(self, source: SessionInput, translation_scale: float = 1.0):
+    def __init__(self, source: SessionInput, translation_scale: float = 1.0,
+                 retarget_config: DexPilotConfig = DexPilotConfig()):
         self.source = source
         self.translation_scale = translation_scale
+        self.retarget_config = retarget_config
+        self.last_step: StreamStep | None = None
         self.sanitizer = StreamSanitizer(source.nominal_period_ns)
         self.commander: TeleopCommander | None = None
         self._model: mujoco.MjModel | None = None
@@ -45,7 +52,7 @@ class StreamDriver:
     def attach(self, scene: Scene) -> None:
         """Command this scene's robot (a new commander only when the model changed)."""
         if scene.model is not self._model:
-            self.commander = TeleopCommander(scene.model, scene.layout, self.translation_scale)
+            self.commander = TeleopCommander(scene.model, scene.layout, self.translation_scale, self.retarget_config)
             self._model = scene.model
 
     def reset(self) -> np.ndarray:
@@ -63,7 +70,16 @@ class StreamDriver:
             if frame is not None and (self._newest is None or frame.timestamp_ns >= self._newest):
                 self._newest, self._offset = frame.timestamp_ns, frame.timestamp_ns - now_ns
             stream_now = None if self._offset is None else now_ns + self._offset
-        return self.commander.command(self.sanitizer.step(frame, stream_now))
+        return self.command_for(frame, stream_now)
+
+    def command_for(self, frame: OperatorFrame | None, stream_now_ns: int | None) -> Command:
+        """One step's input (the frame polled, or None; the time on the stream's clock) -> command."""
+        self.last_step = StreamStep(frame, stream_now_ns)
+        return self.commander.command(self.sanitizer.step(frame, stream_now_ns))
+
+    @property
+    def stream_settings(self) -> dict:
+        return stream_settings(self.sanitizer.nominal_period_ns, self.translation_scale, self.retarget_config)
 
 
 class StreamOperator:
@@ -74,6 +90,11 @@ class StreamOperator:
         self.driver = StreamDriver(source, translation_scale)
         self.name = f"teleop:{source.name}"
         self.step_flags, self.step_reasons = 0, ""
+        self.stream_settings = self.driver.stream_settings
+
+    @property
+    def stream_step(self) -> StreamStep | None:
+        return self.driver.last_step
 
     def reset(self, scene: Scene, data: mujoco.MjData) -> None:
         self.driver.attach(scene)

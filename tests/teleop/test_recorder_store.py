@@ -144,7 +144,8 @@ def test_bench_recorder_reports_each_part_against_both_physics_baselines():
     f = bench_recorder(12)
     ms = f["ms_per_control_step"]
     assert set(ms) == {"physics_control_step", "physics_mj_step", "recording", "evaluation", "evaluation_snapshot",
-                       "evaluation_update"}
+                       "evaluation_update", "recording_with_stream"}
+    assert f["recording_with_stream_vs_recording"] > 0      # the stream's rows, timed on the same steps
     assert all(v > 0 for v in ms.values()) and set(f["median_ms_per_control_step"]) == set(ms)
     assert ms["evaluation"] == pytest.approx(ms["evaluation_snapshot"] + ms["evaluation_update"], abs=2e-4)
     assert ms["physics_mj_step"] < ms["physics_control_step"]       # a control step is SUBSTEPS of them
