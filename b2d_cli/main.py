@@ -225,14 +225,19 @@ def validate(episode) -> None:
 @click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26).")
 @click.option("--operator", type=click.Choice(["stream", "scripted"]), default="stream", show_default=True,
               help="demos: the scripted operator through the teleop stream, or its direct joint path.")
+@click.option("--embodiment", "embodiment", default=None,
+              help="demos: run each --setting's task (a key or a task name; default: every task with a plan) "
+                   "on these embodiments ('all' or NAME[,NAME]) for --episodes seeds: a task x embodiment table.")
+@click.option("--max-steps", "demo_max_steps", default=None, type=click.IntRange(min=1),
+              help="demos with --embodiment: cap on control steps per episode.")
 @click.option("--policy", "policy_name", type=click.Choice(["act", "dp"]), default="act", show_default=True,
               help="policy: which learned policy.")
 @click.option("--config", "config_name", default="tiny", show_default=True, help="policy: its config.")
 @click.option("--train-steps", default=50, show_default=True, type=click.IntRange(min=1), help="policy: training steps.")
 @click.option("--eval-episodes", default=2, show_default=True, type=click.IntRange(min=1),
               help="policy: closed-loop episodes timed (each policy and the baseline).")
-def bench(part, profile, steps, workers, episodes, setting, operator, policy_name, config_name, train_steps,
-          eval_episodes) -> None:
+def bench(part, profile, steps, workers, episodes, setting, operator, embodiment, demo_max_steps, policy_name,
+          config_name, train_steps, eval_episodes) -> None:
     """Print benchmark figures as JSON on stdout."""
     # Per-core figures: Mesa's software GL (llvmpipe) rasterizes on one thread per core by default, so a
     # "one core" render also used the other cores (b2d bench replay --profile paper: 5.6 fps "per core"
@@ -246,6 +251,9 @@ def bench(part, profile, steps, workers, episodes, setting, operator, policy_nam
     elif part == "policy":
         from policies.bench import run_policy_bench
         figures = run_policy_bench(policy_name, config_name, train_steps=train_steps, eval_episodes=eval_episodes)
+    elif part == "demos" and embodiment is not None:
+        from teleop.demo_bench import run_cross_embodiment_demo_bench
+        figures = run_cross_embodiment_demo_bench(embodiment, list(setting), episodes, demo_max_steps, operator)
     elif part == "demos":
         from teleop.demo_bench import run_demo_bench
         figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator)

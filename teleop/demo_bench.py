@@ -5,16 +5,21 @@ recorded control step (operator + physics + recorder).
 Every one of the paper's 26 settings is listed; a setting whose task has no `demo_plan` yet is
 reported as such (0 successes) rather than left out, so the table shows how far the issue's goal
 ("stable success on at least half of the 26 paper settings") is.
+
+With ``--embodiment all|NAME[,NAME]`` it runs each chosen task's plan on those embodiments instead
+(teleop/cross_embodiment.py): a task x embodiment table of successes.
 """
 
 from __future__ import annotations
 
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 from sim.registry import paper_settings, parse_setting_key
 from sim.tasks import is_recordable
+from teleop.cross_embodiment import markdown_table, parse_embodiments, parse_tasks, run_cross_embodiment_bench
 from teleop.demos import DEFAULT_OPERATOR, record_demonstrations
 
 
@@ -44,3 +49,19 @@ def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: s
             "operator": operator,
             "note": f"scripted operator ({operator}), demonstration seeds 0..episodes-1 of each setting; success = the "
                     "evaluator's stable success (reach-and-stop)"}
+
+
+def run_cross_embodiment_demo_bench(embodiments: str, settings: list[str], seeds: int = 3,
+                                    max_steps: int | None = None, operator: str = DEFAULT_OPERATOR) -> dict:
+    """``b2d bench demos --embodiment ...``: ``settings`` are setting keys or task names (none: every task
+    with a plan), ``embodiments`` 'all' or comma-separated names; both fail fast on an unknown name."""
+    chosen = parse_embodiments(embodiments)
+    tasks = parse_tasks(settings)
+
+    def progress(cell: dict) -> None:
+        errors = f" ({len(cell['errors'])} errors)" if cell["errors"] else ""
+        print(f"{cell['task']} on {cell['embodiment']}: {cell['successes']}/{cell['seeds']}{errors}",
+              file=sys.stderr, flush=True)     # stdout carries the JSON
+
+    result = run_cross_embodiment_bench(tasks, chosen, seeds, max_steps, operator, progress=progress)
+    return {**result, "markdown": markdown_table(result)}     # the README's table, paper cells in bold

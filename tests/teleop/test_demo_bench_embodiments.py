@@ -1,0 +1,79 @@
+"""`b2d bench demos --embodiment ...`: a task's plan on other embodiments (teleop/cross_embodiment.py).
+Real scenes and episodes, kept to a few control steps."""
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from b2d_cli.main import cli
+from sim.errors import UnknownNameError
+from sim.registry import names
+from sim.tasks import load_task
+from teleop.cross_embodiment import (decided, markdown_table, parse_embodiments, parse_tasks, recordable_tasks,
+                                     run_cell, run_cross_embodiment_bench)
+
+TASK = "citrus_plate_loading"
+PAPER, OTHER = "ur5_rh5dg2", "xarm7_leap"
+
+
+def test_embodiment_names_all_list_and_unknown():
+    assert parse_embodiments("all") == names("embodiments") and len(names("embodiments")) == 12
+    assert parse_embodiments(f"{OTHER}, {PAPER},{OTHER}") == [OTHER, PAPER]
+    with pytest.raises(UnknownNameError, match="valid embodiment names: .*ur5_shadow"):
+        parse_embodiments(f"{PAPER},ur5_nope")
+
+
+def test_task_names_from_keys_or_tasks():
+    assert parse_tasks([f"{TASK}__{OTHER}", "trash_disposal", TASK]) == [TASK, "trash_disposal"]
+    assert parse_tasks(None) == recordable_tasks() and TASK in recordable_tasks()
+    assert all(load_task(t).demo_plan for t in recordable_tasks())
+    with pytest.raises(UnknownNameError, match="valid task names"):
+        parse_tasks(["nope"])
+    with pytest.raises(UnknownNameError, match="valid embodiment names"):
+        parse_tasks([f"{TASK}__nope"])
+
+
+def test_majority_is_decided_early_only_when_settled():
+    assert decided(2, 0, 3) and decided(0, 2, 3) and not decided(1, 1, 3)
+    assert decided(0, 6, 12) and not decided(6, 5, 12) and decided(7, 0, 12)
+
+
+def test_bench_runs_every_cell_and_tables_them():
+    result = run_cross_embodiment_bench([TASK], [PAPER, OTHER], seeds=1, max_steps=3, dry_run=False)
+    assert result["tasks"] == [TASK] and result["embodiments"] == [PAPER, OTHER]
+    assert [(c["embodiment"], c["seeds"], c["paper"], c["errors"]) for c in result["cells"]] == [
+        (PAPER, 1, True, []), (OTHER, 1, False, [])]
+    assert result["table"] == {TASK: {PAPER: "0/1", OTHER: "0/1"}}   # 3 steps: no success yet
+    assert result["embodiments_with_majority"] == {TASK: 0} and result["tasks_reaching_goal"] == []
+    assert result["per_embodiment"][OTHER] == {"successes": 0, "episodes": 1, "tasks_with_majority": 0}
+    lines = markdown_table(result).splitlines()
+    assert lines[0] == f"| task | {PAPER} | {OTHER} | majority on |"
+    assert lines[2] == f"| {TASK} | **0/1** | 0/1 | 0 |"
+
+
+def test_a_bad_cell_reports_its_error_and_the_bench_lists_tasks_without_a_plan():
+    unplanned = next(t for t in names("tasks") if not load_task(t).demo_plan)
+    cell = run_cell(unplanned, OTHER, seeds=2, max_steps=2, dry_run=False)
+    assert cell["seeds"] == 2 and cell["successes"] == 0 and len(cell["errors"]) == 2
+    assert all("demo_plan" in e for e in cell["errors"])
+    result = run_cross_embodiment_bench([unplanned], [OTHER], seeds=1, max_steps=2)
+    assert result["without_plan"] == [unplanned] and result["cells"] == []
+
+
+def test_plan_dry_run_follows_the_paper_embodiments_path():
+    cell = run_cell(TASK, PAPER, seeds=1, max_steps=2)
+    reach = cell["plan_reach"]
+    assert set(reach) == {"left", "right"} and cell["ik_off_path"] == []
+    assert all(r["tracked_steps"] > 100 and r["worst_m"] < 0.01 for r in reach.values())
+
+
+def test_cli_embodiment_option():
+    result = CliRunner().invoke(cli, ["bench", "demos", "--embodiment", OTHER, "--setting", TASK,
+                                      "--episodes", "1", "--max-steps", "2"])
+    assert result.exit_code == 0, result.output
+    figures = json.loads(result.stdout)
+    assert figures["table"] == {TASK: {OTHER: "0/1"}} and figures["max_steps"] == 2
+    assert figures["markdown"].splitlines()[2] == f"| {TASK} | 0/1 | 0 |"
+    result = CliRunner().invoke(cli, ["bench", "demos", "--embodiment", "ur5_nope"])
+    assert result.exit_code == 2 and "valid embodiment names" in result.output
