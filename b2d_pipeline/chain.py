@@ -81,10 +81,13 @@ def past_durations(instance: dg.DagsterInstance, jobs, runs_per_job: int = 5) ->
 
 def _eta(durations: dict[str, list[float]], remaining: list[str]) -> str:
     """Remaining runs at the mean time of the job's runs so far (this invocation's, else the instance's
-    earlier ones); "ETA ?" while a remaining job has never run here (a guess from other jobs misleads)."""
-    if any(job not in durations for job in remaining):
+    earlier ones). A job that has never run here is not guessed from other jobs (that misled by minutes):
+    while there is one the ETA is a lower bound ("ETA >= m:ss"), or "ETA ?" when nothing is known."""
+    known = [sum(durations[job]) / len(durations[job]) for job in remaining if job in durations]
+    if not known:
         return "ETA ?"
-    return "ETA " + _clock(sum(sum(durations[job]) / len(durations[job]) for job in remaining))
+    bound = ">= " if len(known) < len(remaining) else ""
+    return f"ETA {bound}{_clock(sum(known))}"
 
 
 def _clock(seconds: float) -> str:
@@ -96,9 +99,10 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
     """Run the plan on `instance` (a persistent one: step processes write to it). `processes`: steps run
     side by side at most (default: the machine's cores; 1 runs each run in one process)."""
     processes = processes or os.cpu_count() or 1
-    # forkserver: step processes fork from one that has imported the project already (~2 s saved a step)
-    executor = ({"multiprocess": {"max_concurrent": processes, "start_method": {
-                    "forkserver": {"preload_modules": ["b2d_pipeline.definitions"]}}}}
+    # forkserver: step processes fork from one that has imported the project already (~2 s saved a step),
+    # and torch with the models (imported by the training and rollout steps only, ~3-7 s each otherwise)
+    executor = ({"multiprocess": {"max_concurrent": processes, "start_method": {"forkserver": {"preload_modules": [
+                    "b2d_pipeline.definitions", "policies.models.act", "policies.models.diffusion"]}}}}
                 if processes > 1 else {"in_process": {}})
     defs = build_definitions(settings)
     # another executor (celery, k8s: B2D_EXECUTOR) takes its own config; the default one is sized here

@@ -16,6 +16,9 @@ def instance_config(cores: int | None = None) -> dict:
     cores = cores or os.cpu_count() or 1
     return {
         "telemetry": {"enabled": False},
+        # the terminal shows b2d's progress lines; Dagster's own lines (every step process announces
+        # itself at DEBUG before the run's logger config applies) stay in the run storage and the UI
+        "python_logs": {"python_log_level": "ERROR"},
         "concurrency": {
             # one queued run per core, and across all runs at most one CPU-bound step per core (the
             # b2d_cpu pool: b2d_pipeline/assets/common.py): a backfill of many partitions keeps both
