@@ -25,7 +25,7 @@ import numpy as np
 from sim.embodiment.mirror import M
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import FORWARD, axis_rotation, pitched_palm_down
-from teleop.pinch_grasp import (DAMPING, FOLD_FRACTION, MEET_M, SOLVE_ITERS, hand_kinematics, pinch_grasp,
+from teleop.pinch_grasp import (DAMPING, MEET_M, SOLVE_ITERS, hand_kinematics, moving_and_folded, pinch_grasp,
                                 pinch_rows)
 from teleop.transit import hand_outline, object_geoms
 
@@ -76,13 +76,7 @@ def tip_pinch(hand_name: str) -> TipPinch:
     pads = pinch_grasp(hand_name)
     fingers = pads.fingers
     thumb, tips = pinch_rows(hand_name, fingers)
-    moving = np.zeros(kin.dof, bool)
-    for q in (kin.home, kin.mid):
-        _, J = kin.points_and_jacobians(q)
-        for row in [thumb, *tips]:
-            moving |= np.abs(J[row]).sum(axis=0) > 1e-9
-    far = np.where(np.abs(kin.upper - kin.home) >= np.abs(kin.lower - kin.home), kin.upper, kin.lower)
-    folded = kin.home + FOLD_FRACTION * (far - kin.home)
+    moving, folded = moving_and_folded(kin, [thumb, *tips])
 
     def residual(q):
         P = tip_points(hand_name, fingers, q)

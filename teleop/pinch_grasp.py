@@ -63,19 +63,24 @@ def pinch_grasp(hand_name: str) -> PinchGrasp:
     return grasp
 
 
+def moving_and_folded(kin, rows: list[int]) -> tuple[np.ndarray, np.ndarray]:
+    """(actuators that move any of the given keypoint rows, the pose the others fold away to): the
+    actuators that move a pinching point solve, the rest fold away."""
+    moving = np.zeros(kin.dof, bool)
+    for q in (kin.home, kin.mid):     # a coupling resting on its limit hides a joint at one of them
+        _, J = kin.points_and_jacobians(q)
+        for row in rows:
+            moving |= np.abs(J[row]).sum(axis=0) > 1e-9
+    far = np.where(np.abs(kin.upper - kin.home) >= np.abs(kin.lower - kin.home), kin.upper, kin.lower)
+    return moving, kin.home + FOLD_FRACTION * (far - kin.home)
+
+
 def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
     """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
     sample (one start gets caught in local minima on the hands with little thumb opposition)."""
     kin = hand_kinematics(hand_name)
     thumb, tips = pinch_rows(hand_name, fingers)
-    # actuators that move a pinching pad or the thumb pad solve; the rest fold away
-    moving = np.zeros(kin.dof, bool)
-    for q in (kin.home, kin.mid):     # a coupling resting on its limit hides a joint at one of them
-        _, J = kin.points_and_jacobians(q)
-        for row in [thumb, *tips]:
-            moving |= np.abs(J[row]).sum(axis=0) > 1e-9
-    far = np.where(np.abs(kin.upper - kin.home) >= np.abs(kin.lower - kin.home), kin.upper, kin.lower)
-    folded = kin.home + FOLD_FRACTION * (far - kin.home)
+    moving, folded = moving_and_folded(kin, [thumb, *tips])
 
     def gap(q):
         P = kin.points(q)
