@@ -25,8 +25,8 @@ import numpy as np
 from sim.embodiment.mirror import M
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import FORWARD, axis_rotation, pitched_palm_down
-from teleop.pinch_grasp import (DAMPING, MEET_M, SOLVE_ITERS, hand_kinematics, moving_and_folded, pinch_grasp,
-                                pinch_rows)
+from teleop.pinch_grasp import (DAMPING, MEET_M, SOLVE_ITERS, damped_step, hand_kinematics, moving_and_folded,
+                                pinch_grasp, pinch_rows)
 from teleop.transit import hand_outline, object_geoms
 
 FD_STEP = 1e-5                 # rad: finite-difference step of the tips' Jacobian
@@ -95,14 +95,7 @@ def tip_pinch(hand_name: str) -> TipPinch:
             dq = q.copy()
             dq[c] += FD_STEP
             A[:, j] = (residual(dq) - r) / FD_STEP
-        step = np.linalg.solve(A.T @ A + damping * np.eye(len(cols)), -A.T @ r)
-        trial = q.copy()
-        trial[cols] = np.clip(q[cols] + step, kin.lower[cols], kin.upper[cols])
-        trial_gap = gap(trial)
-        if trial_gap < q_gap:
-            q, q_gap, damping = trial, trial_gap, max(damping / 3, DAMPING)
-        else:
-            damping = min(damping * 10, 1e6)
+        q, q_gap, damping = damped_step(kin, q, cols, A, r, damping, gap, q_gap)
         if q_gap <= 0.2 * MEET_M:
             break
     q.flags.writeable = False       # cached: shared by every caller

@@ -75,6 +75,19 @@ def moving_and_folded(kin, rows: list[int]) -> tuple[np.ndarray, np.ndarray]:
     return moving, kin.home + FOLD_FRACTION * (far - kin.home)
 
 
+def damped_step(kin, q: np.ndarray, cols, A: np.ndarray, r: np.ndarray, damping: float, gap, q_gap: float):
+    """One Levenberg-Marquardt step on the joints ``cols`` (residual ``r``, its Jacobian ``A`` over those
+    joints), kept within the joint ranges: taken if it shrinks ``gap`` (damping eases), else refused
+    (damping grows). Returns (q, its gap, damping)."""
+    step = np.linalg.solve(A.T @ A + damping * np.eye(A.shape[1]), -A.T @ r)
+    trial = q.copy()
+    trial[cols] = np.clip(q[cols] + step, kin.lower[cols], kin.upper[cols])
+    trial_gap = gap(trial)
+    if trial_gap < q_gap:
+        return trial, trial_gap, max(damping / 3, DAMPING)
+    return q, q_gap, min(damping * 10, 1e6)
+
+
 def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
     """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
     sample (one start gets caught in local minima on the hands with little thumb opposition)."""
@@ -96,14 +109,7 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
             P, J = kin.points_and_jacobians(q)
             r = np.concatenate([P[thumb] - P[t] for t in tips])
             A = np.concatenate([J[thumb] - J[t] for t in tips])[:, moving]
-            step = np.linalg.solve(A.T @ A + damping * np.eye(A.shape[1]), -A.T @ r)
-            trial = q.copy()
-            trial[moving] = np.clip(q[moving] + step, kin.lower[moving], kin.upper[moving])
-            trial_gap = gap(trial)
-            if trial_gap < q_gap:
-                q, q_gap, damping = trial, trial_gap, max(damping / 3, DAMPING)
-            else:
-                damping = min(damping * 10, 1e6)
+            q, q_gap, damping = damped_step(kin, q, moving, A, r, damping, gap, q_gap)
         if q_gap < best_gap:
             best, best_gap = q.copy(), q_gap
         if best_gap <= MEET_M:     # the first start that meets: mid-range first, the most natural pinch
