@@ -43,6 +43,19 @@ def build_evaluation_table() -> dg.JobDefinition:
 JOBS = {f.__name__: f for f in (produce_and_train, evaluate_policies, build_evaluation_table)}
 
 
+def job_for(name: str, **env: str) -> dg.JobDefinition:
+    """The project's job `name` under the settings `env` (FactorySettings.to_env). The settings travel in
+    the job's pointer, so the run and every step process (forked, spawned or on a Celery worker) build the
+    same definitions, and Dagster's cache of the last loaded job per pointer never hands a run the job of
+    other settings (it did: a Celery test's job, executor and all, to a later run in the same process)."""
+    return build_definitions(FactorySettings.from_mapping(env)).resolve_job_def(name)
+
+
+def reconstructable_job(name: str, settings: FactorySettings):
+    return dg.build_reconstructable_job("b2d_pipeline.chain", "job_for", reconstructable_args=(name,),
+                                        reconstructable_kwargs=settings.to_env())
+
+
 def run_plan(settings: FactorySettings, setting_keys: list[str], channels: list[str] | None = None) -> list[tuple]:
     """[(setting or None, job name, partition key or None)] in the order they run."""
     plan = []
@@ -125,7 +138,8 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                     if isinstance(partition, dg.MultiPartitionKey) else {"dagster/partition": partition} if partition
                     else {})
             t0 = time.perf_counter()
-            result = dg.execute_job(dg.reconstructable(JOBS[job]), instance, run_config=run_configs[job], tags=tags)
+            result = dg.execute_job(reconstructable_job(job, settings), instance, run_config=run_configs[job],
+                                    tags=tags)
             if job not in timed_here:                 # this machine, this size: forget the older runs
                 durations[job], timed_here = [], timed_here | {job}
             durations[job].append(time.perf_counter() - t0)

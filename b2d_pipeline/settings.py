@@ -35,13 +35,18 @@ class FactorySettings:
 
     @classmethod
     def from_env(cls, **overrides) -> "FactorySettings":
+        return cls.from_mapping(os.environ, **overrides)
+
+    @classmethod
+    def from_mapping(cls, env, **overrides) -> "FactorySettings":
+        """Settings from an environment-like mapping (`to_env`'s keys), then the overrides."""
         values = dict(
-            data_root=Path(os.environ.get("B2D_DATA_ROOT", REPO_ROOT / "data")),
-            profile=sensor_profile(os.environ.get("B2D_PROFILE", "preview")),
-            render_workers=int(os.environ.get("B2D_RENDER_WORKERS", "1")),
-            policies=tuple(p for p in os.environ.get("B2D_POLICIES", "act,dp").split(",") if p),
-            policy_config=os.environ.get("B2D_POLICY_CONFIG", "tiny"),
-            executor=os.environ.get("B2D_EXECUTOR", "default"),
+            data_root=Path(env.get("B2D_DATA_ROOT", REPO_ROOT / "data")),
+            profile=sensor_profile(env.get("B2D_PROFILE", "preview")),
+            render_workers=int(env.get("B2D_RENDER_WORKERS", "1")),
+            policies=tuple(p for p in env.get("B2D_POLICIES", "act,dp").split(",") if p),
+            policy_config=env.get("B2D_POLICY_CONFIG", "tiny"),
+            executor=env.get("B2D_EXECUTOR", "default"),
         )
         values.update(overrides)
         if isinstance(values["profile"], str):
