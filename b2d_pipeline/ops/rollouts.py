@@ -20,6 +20,7 @@ from policies.records import records_frame, write_records
 from policies.rollouts import run_rollouts
 from sim.registry import parse_setting_key
 
+
 def chunks(episodes: int, per_step: int) -> list[tuple[int, int]]:
     """[(first episode, count)] covering 0..episodes-1."""
     return [(first, min(per_step, episodes - first)) for first in range(0, episodes, per_step)]
