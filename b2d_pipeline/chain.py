@@ -23,24 +23,8 @@ from sim.registry import channel_names
 QUIET_LOGS = {"loggers": {"console": {"config": {"log_level": "ERROR"}}}}
 
 
-def _job(name: str) -> dg.JobDefinition:
-    # rebuilt in every step process from the environment that `materialize_chain` sets
-    return build_definitions(FactorySettings.from_env()).resolve_job_def(name)
-
-
-def produce_and_train() -> dg.JobDefinition:
-    return _job("produce_and_train")
-
-
-def evaluate_policies() -> dg.JobDefinition:
-    return _job("evaluate_policies")
-
-
-def build_evaluation_table() -> dg.JobDefinition:
-    return _job("build_evaluation_table")
-
-
-JOBS = {f.__name__: f for f in (produce_and_train, evaluate_policies, build_evaluation_table)}
+# the project's jobs `b2d materialize` runs, in dependency order per setting
+JOBS = ("produce_and_train", "evaluate_policies", "build_evaluation_table")
 
 
 def job_for(name: str, **env: str) -> dg.JobDefinition:
@@ -52,6 +36,7 @@ def job_for(name: str, **env: str) -> dg.JobDefinition:
 
 
 def reconstructable_job(name: str, settings: FactorySettings):
+    """The job `name` under `settings`, as Dagster loads it in every process of a run."""
     return dg.build_reconstructable_job("b2d_pipeline.chain", "job_for", reconstructable_args=(name,),
                                         reconstructable_kwargs=settings.to_env())
 

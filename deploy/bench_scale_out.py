@@ -110,7 +110,8 @@ def run_renders(home: Path, data_root: Path, args) -> dict[str, list[tuple[float
     """(wall seconds, 1-minute load average at the end) per run of the partition, in process and on the workers."""
     import sys
 
-    from b2d_pipeline.chain import produce_and_train
+    from b2d_pipeline.chain import reconstructable_job
+    from b2d_pipeline.settings import FactorySettings
     from b2d_pipeline.resources import EpisodeStore
     from episodes.stages import replay_to_file
     from teleop.demos import record_demonstrations
@@ -128,8 +129,11 @@ def run_renders(home: Path, data_root: Path, args) -> dict[str, list[tuple[float
         for _ in range(args.repeats):
             for name in walls:                 # interleaved, as above
                 os.environ["B2D_EXECUTOR"] = name
+                # the settings in the job's pointer: Dagster keeps the last job loaded per pointer, so one
+                # pointer for both executors would run the first one's job every time
+                job = reconstructable_job("produce_and_train", FactorySettings.from_env())
                 started = time.perf_counter()
-                result = dg.execute_job(dg.reconstructable(produce_and_train), instance, run_config=quiet,
+                result = dg.execute_job(job, instance, run_config=quiet,
                                         asset_selection=[dg.AssetKey("renders")], tags={"dagster/partition": setting})
                 walls[name].append((time.perf_counter() - started, os.getloadavg()[0]))
                 assert result.success, name

@@ -11,7 +11,7 @@ from pathlib import Path
 import dagster as dg
 import pytest
 
-from b2d_pipeline.chain import produce_and_train
+from b2d_pipeline.chain import reconstructable_job
 from b2d_pipeline.definitions import build_definitions
 from b2d_pipeline.resources import EpisodeStore
 from b2d_pipeline.settings import FactorySettings
@@ -56,7 +56,7 @@ def test_a_settings_renders_run_on_two_celery_workers_with_the_in_process_bytes(
         monkeypatch.setenv(name, value)
     with dg.DagsterInstance.from_config(str(home)) as instance:
         # `b2d materialize`'s own job (b2d_pipeline/chain.py), its renders only
-        result = dg.execute_job(dg.reconstructable(produce_and_train), instance,
+        result = dg.execute_job(reconstructable_job("produce_and_train", FactorySettings.from_env()), instance,
                                 asset_selection=[dg.AssetKey("renders")], tags={"dagster/partition": SETTING})
         assert result.success
         worker_of = celery_worker_of_steps(instance.all_logs(result.run_id))
