@@ -245,8 +245,9 @@ def _tessellation_comparison(replay_path: Path, profile) -> dict:
     rigs = {"profile": CameraRig(model, profile), "mujoco_default": CameraRig(model, default)}
     cpu = {k: 0.0 for k in rigs}
     rgb_changed, depth_changed = [], []
+    steps = frame_steps(len(qpos), profile.rate_hz)
     try:
-        for step in frame_steps(len(qpos), profile.rate_hz):
+        for step in steps:
             set_positions(model, data, qpos[step])
             shots = {}
             for name, rig in rigs.items():
@@ -259,13 +260,12 @@ def _tessellation_comparison(replay_path: Path, profile) -> dict:
                     rgb_changed.append(float((shot["rgb"] != ref["rgb"]).any(axis=-1).mean()))
                 if "depth_m" in shot:
                     depth_changed.append(float((np.abs(shot["depth_m"] - ref["depth_m"]) > 0.002).mean()))
-        frames = len(frame_steps(len(qpos), profile.rate_hz))
     finally:
         for rig in rigs.values():
             rig.close()
     return {"tessellation": list(profile.tessellation), "mujoco_default": list(MUJOCO_TESSELLATION),
-            "camera_cpu_ms_per_frame": round(1e3 * cpu["profile"] / frames, 3),
-            "camera_cpu_ms_per_frame_mujoco_default": round(1e3 * cpu["mujoco_default"] / frames, 3),
+            "camera_cpu_ms_per_frame": round(1e3 * cpu["profile"] / len(steps), 3),
+            "camera_cpu_ms_per_frame_mujoco_default": round(1e3 * cpu["mujoco_default"] / len(steps), 3),
             "camera_speedup": round(cpu["mujoco_default"] / max(cpu["profile"], 1e-9), 3),
             "rgb_pixels_changed": round(float(np.mean(rgb_changed)), 4) if rgb_changed else None,
             "depth_pixels_changed_over_2mm": round(float(np.mean(depth_changed)), 4) if depth_changed else None,

@@ -22,8 +22,7 @@ from pathlib import Path
 
 from sim.errors import UnknownNameError
 from sim.registry import SETTING_SEPARATOR, names, parse_setting_key, validate_name
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS, record_demonstrations
 from teleop.recorder import episode_horizon, home
@@ -75,8 +74,7 @@ def plan_reach(task: str, embodiment: str, index: int = 0) -> dict:
     end more than OFF_PATH_M off the plan, and the worst pose's error when solved afresh from home
     (small: the tracking lost its IK branch on the way; large: the pose is out of the arm's reach).
     Every step is tracked: a warm start two steps old already sends the xArm7 into other branches."""
-    spec = load_task(task)
-    scene = build_scene(spec, embodiment, demonstration_sample(spec, task_seed(names("tasks").index(task), index)))
+    scene = demonstration_scene(task, embodiment, index)
     data = home(scene)
     operator = ScriptedOperator()
     operator.reset(scene, data)
