@@ -13,11 +13,10 @@ import numpy as np
 
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
 from sim import physics
-from sim.registry import names, sensor_profile
+from sim.registry import sensor_profile
 from sim.render import MUJOCO_TESSELLATION
 from sim.scene.builder import demonstration_scene
 from sim.scene.state import SceneObserver
-from sim.tasks import load_task
 from teleop.demos import record_demonstrations
 from teleop.recorder import home, new_buffer, store_step
 from teleop.scripted_operator import ScriptedOperator

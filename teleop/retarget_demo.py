@@ -88,11 +88,14 @@ def retarget_config(stream: OperatorStreamRecord, source=None) -> DexPilotConfig
 def recorded_steps(stream: OperatorStreamRecord) -> Iterator[StreamStep]:
     """The recording's per-step stream input, as the sanitizer received it."""
     for i in range(stream.num_steps):
-        frame = None
-        if stream.arrived[i]:
-            frame = OperatorFrame(int(stream.timestamp_ns[i]), stream.keypoints[i], stream.wrist_pos[i],
-                                  stream.wrist_quat[i], stream.keypoints_valid[i], stream.wrist_valid[i])
+        frame = _stored_frame(stream, i, int(stream.timestamp_ns[i])) if stream.arrived[i] else None
         yield StreamStep(frame, int(stream.clock_ns[i]) if stream.clock_known[i] else None)
+
+
+def _stored_frame(stream: OperatorStreamRecord, row: int, timestamp_ns: int) -> OperatorFrame:
+    """The operator frame stored in `row`, stamped `timestamp_ns`."""
+    return OperatorFrame(timestamp_ns, stream.keypoints[row], stream.wrist_pos[row], stream.wrist_quat[row],
+                         stream.keypoints_valid[row], stream.wrist_valid[row])
 
 
 def held_steps(stream: OperatorStreamRecord, count: int) -> Iterator[StreamStep]:
@@ -105,9 +108,7 @@ def held_steps(stream: OperatorStreamRecord, count: int) -> Iterator[StreamStep]
     period = stream.settings["nominal_period_ns"] or session_time_ns(1)
     clock = next((int(stream.clock_ns[i]) for i in range(stream.num_steps - 1, -1, -1) if stream.clock_known[i]), None)
     for k in range(1, count + 1):
-        frame = OperatorFrame(int(stream.timestamp_ns[last]) + k * period,
-                              stream.keypoints[last], stream.wrist_pos[last], stream.wrist_quat[last],
-                              stream.keypoints_valid[last], stream.wrist_valid[last])
+        frame = _stored_frame(stream, last, int(stream.timestamp_ns[last]) + k * period)
         yield StreamStep(frame, None if clock is None else clock + k * period)
 
 
