@@ -119,54 +119,47 @@ def bench_recorder(steps: int) -> dict:
     }
 
 
-def bench_replay(profile_name: str, steps: int, workers: int = 1) -> dict:
+def bench_replay(profile_name: str, steps: int, workers: int = 1, setting: str | None = None) -> dict:
     """Frames per second per core through replay -> render -> assemble, the share of time in each
     part of the work (physics, each camera modality, tactile, posing, writing), bytes per frame on
-    disk per modality; with `workers` > 1 also the render's wall-clock speed-up over one worker.
+    disk per modality; with `workers` > 1 also the render's speed-up over one worker. `steps` 0 records a
+    whole demonstration (until the scripted operator's plan ends); `setting` (a key) replaces the foundation's.
     OpenCV (segment lookups, the tactile blur) runs on one thread meanwhile, as the figures are per core."""
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
     try:
-        return _bench_replay(profile_name, steps, workers)
+        return _bench_replay(profile_name, steps, workers, setting)
     finally:
         cv2.setNumThreads(threads)
 
 
-def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
+def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | None = None) -> dict:
+    from sim.registry import parse_setting_key
+
     profile = sensor_profile(profile_name)
+    chosen = parse_setting_key(setting or f"{TASK}__{EMBODIMENT}")
+    task, embodiment = chosen.task, chosen.embodiment
     clock = time.perf_counter
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        raw = record_demonstrations(TASK, EMBODIMENT, 1, tmp, max_steps=steps)[0].path
+        recorded = record_demonstrations(task, embodiment, 1, tmp, max_steps=steps or None)[0]
+        if recorded.path is None:
+            raise RuntimeError(f"{task} on {embodiment}: the demonstration failed to record: {recorded.error}")
+        raw, steps = recorded.path, recorded.steps
         cpu0 = time.process_time()      # every thread of this process
         t0 = clock()
         replay_to_file(raw, tmp / "e.replay.h5")
-        t1, r0 = clock(), _cpu_with_children()
+        t1 = clock()
         info = render_to_file(tmp / "e.replay.h5", profile, tmp / "e.render.h5")
-        t2, render_cpu = clock(), _cpu_with_children() - r0
+        t2 = clock()
         out = assemble_episode(tmp / "e.replay.h5", tmp / "e.render.h5", profile, tmp / "episode_e.hdf5")
         t3 = clock()
         cpu = time.process_time() - cpu0
         stored = _bytes_by_modality(tmp / "episode_e.hdf5")
         parallel = {}
         if workers > 1:
-            w0, r0 = clock(), _cpu_with_children()
-            more = render_to_file(tmp / "e.replay.h5", profile, tmp / "w.render.h5", workers=workers)
-            wall, more_cpu = clock() - w0, _cpu_with_children() - r0
-            parallel = {"workers": more["workers"], "render_wall_s": round(wall, 3),
-                        "render_wall_s_one_worker": round(t2 - t1, 3),
-                        "speedup_vs_one_worker": round((t2 - t1) / wall, 3),
-                        "frames_speedup_vs_one_worker": round(_frame_span(info) / _frame_span(more), 3),
-                        # CPU seconds of the whole render (every process): what splitting adds, and the
-                        # speed-up it leaves on idle cores (workers x one worker's CPU / all workers' CPU)
-                        "render_cpu_s": round(more_cpu, 3), "render_cpu_s_one_worker": round(render_cpu, 3),
-                        "speedup_bound_from_cpu": round(more["workers"] * render_cpu / max(more_cpu, 1e-9), 3),
-                        "note": ("speedup_vs_one_worker: the whole render call, each worker's start (process, imports "
-                                 "~1.9 s CPU, scene and renderer ~1.2 s) and the join included; frames_speedup_vs_one_worker: from the "
-                                 "first frame any worker starts to the last one any worker ends, against one worker's "
-                                 "frames (a steady stream of episodes, where start-up is paid once per worker); "
-                                 "each worker runs llvmpipe on its own thread (unless LP_NUM_THREADS says otherwise) "
-                                 "and OpenCV on one")}
+            from b2d_cli.render_workers_bench import parallel_render_figures
+            parallel = parallel_render_figures(tmp / "e.replay.h5", profile, workers, tmp)
         comparison = _tessellation_comparison(tmp / "e.replay.h5", profile) if profile.tessellation else {}
     frames, total = info["frames"], t3 - t0
     seconds = dict(info["seconds"])
@@ -176,7 +169,7 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
              "assemble_write": t3 - t2}
     parts["render_other"] = max(0.0, (t2 - t1) - setup - sum(seconds.values()))
     unavoidable = sum(v for k, v in seconds.items() if k in UNAVOIDABLE_RENDER_PARTS)
-    return {"profile": profile_name, "control_steps": steps, "frames": frames,
+    return {"profile": profile_name, "setting": chosen.key, "control_steps": steps, "frames": frames,
             "cameras": len(profile.camera_ids), "resolution": [profile.width, profile.height],
             "tactile_sites": "on" if profile.tactile_enabled else "off",
             "shadows": profile.shadows, "antialias": profile.antialias,
@@ -199,7 +192,7 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
             **({"parallel_render": parallel} if parallel else {}),
             **({"tessellation_vs_mujoco_default": comparison} if comparison else {}),
             "load_average_1min": round(os.getloadavg()[0], 2),
-            "note": (f"scripted {TASK} on {EMBODIMENT}, one core (cpu_seconds_per_wall_second ~1: no other thread "
+            "note": (f"scripted {task} on {embodiment}, one core (cpu_seconds_per_wall_second ~1: no other thread "
                      "worked; llvmpipe_threads 0 = software GL on the calling thread); shares and ms_per_frame are the run's time "
                      "less the render set-up, so the replay's and the assembly's own one-off costs (scene build, "
                      "opening files) are still in physics_replay and assemble_write; render_setup (scene build, label and tactile set-up, once per render file) is "
@@ -207,20 +200,6 @@ def _bench_replay(profile_name: str, steps: int, workers: int) -> dict:
                      "_with_setup figures; unavoidable = the GL render and read-back of each camera pass and "
                      "tactile ray casting; camera_decode (GL buffers -> metric depth and geom ids) is CPU work "
                      "counted as overhead; physics_replay includes the evaluator")}
-
-
-def _cpu_with_children() -> float:
-    """CPU seconds of this process and of its ended child processes (render workers)."""
-    import resource
-
-    children = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return time.process_time() + children.ru_utime + children.ru_stime
-
-
-def _frame_span(info: dict) -> float:
-    """Wall seconds from the first frame any worker of a render started to the last one ended."""
-    windows = info["frame_windows"]
-    return max(end for _, end in windows) - min(start for start, _ in windows)
 
 
 def _tessellation_comparison(replay_path: Path, profile) -> dict:
@@ -232,12 +211,13 @@ def _tessellation_comparison(replay_path: Path, profile) -> dict:
     import h5py
     import mujoco
 
-    from episodes.stages import _RawView, frame_steps
+    from episodes.replay_frames import RawView
+    from episodes.stages import frame_steps
     from sim.render import CameraRig, set_positions
     from sim.replay import scene_for
 
     with h5py.File(replay_path, "r") as src:
-        scene = scene_for(_RawView(src), replay_path)
+        scene = scene_for(RawView(src), replay_path)
         qpos = src["qpos"][()]
     model, data = scene.model, mujoco.MjData(scene.model)
     default = dataclasses.replace(profile, tessellation=None)
@@ -371,11 +351,11 @@ def bench_tactile_replay(profile_name: str, steps: int) -> dict:
     }
 
 
-def run(part: str, profile: str = "preview", steps: int = 120, workers: int = 1) -> dict:
+def run(part: str, profile: str = "preview", steps: int = 120, workers: int = 1, setting: str | None = None) -> dict:
     if part == "recorder":
         return bench_recorder(steps)
     if part == "replay":
-        return bench_replay(profile, steps, workers)
+        return bench_replay(profile, steps, workers, setting)
     if part == "tactile-replay":
         return bench_tactile_replay(profile, steps)
     if part == "labels":     # ms per frame of each label against the RGB render of the same cameras

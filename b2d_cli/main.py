@@ -217,12 +217,14 @@ def validate(episode) -> None:
                                           "embodiments", "demos", "retarget", "teleop", "policy", "chain"]))
 @click.option("--profile", default="preview", show_default=True, help="Sensor profile (replay, tactile-replay).")
 @click.option("--steps", default=120, show_default=True,
-              help="Control steps to record (recorder, replay, teleop); frames to retarget (retarget).")
+              help="Control steps to record (recorder, replay, teleop; replay: 0 = a whole demonstration); "
+                   "frames to retarget (retarget).")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
               help="replay: also render with this many processes and report the speed-up.")
 @click.option("--episodes", default=4, show_default=True, type=click.IntRange(min=1),
               help="demos: demonstrations per setting.")
-@click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26).")
+@click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26); replay: the "
+                                                "setting whose demonstration is replayed (default: the foundation).")
 @click.option("--operator", type=click.Choice(["stream", "scripted"]), default="stream", show_default=True,
               help="demos: the scripted operator through the teleop stream, or its direct joint path.")
 @click.option("--embodiment", "embodiment", default=None,
@@ -274,7 +276,8 @@ def bench(part, profile, steps, workers, episodes, setting, operator, embodiment
         figures = run_embodiment_bench()
     else:
         from b2d_cli import benchmarks
-        figures = benchmarks.run(part, profile=profile, steps=steps, workers=workers)
+        figures = benchmarks.run(part, profile=profile, steps=steps, workers=workers,
+                                 setting=setting[0] if setting else None)
     click.echo(json.dumps(figures, indent=2))
 
 

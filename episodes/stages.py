@@ -9,26 +9,22 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import time
 from pathlib import Path
 
 import h5py
-import mujoco
 import numpy as np
 
 from episodes import schema
-from episodes.atomic import atomic_path, clean_stale_temporaries, file_sha256, guarded_h5, temporary_dir
+from episodes.atomic import atomic_path, clean_stale_temporaries, file_sha256, guarded_h5
 from episodes.raw import raw_episode_id, read_raw
-from episodes.h5_concat import concat_frames, copy_in_name_order
-from episodes.render_frames import FrameRenderer
-from episodes.workers import die_with_parent
+from episodes.h5_concat import copy_in_name_order
+from episodes.replay_frames import ReplayFrames
 from episodes.writer import EpisodeWriter
 from sim import physics
 from sim.errors import SpecError
 from sim.registry import SensorProfile
-from sim.render import set_positions
-from sim.replay import DEFAULT_DRIFT_BOUND_M, replay, scene_for
+from sim.replay import DEFAULT_DRIFT_BOUND_M, replay
 
 log = logging.getLogger(__name__)
 REPLAY_SCHEMA = "b2d.replay/1"
@@ -80,9 +76,9 @@ def replay_to_file(raw_path: Path, out_path: Path, drift_bound_m: float = DEFAUL
 
 def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, max_frames: int | None = None,
                    workers: int = 1) -> dict:
-    """Render the replay's frames under `profile`. With `workers` > 1 the frame range is split into
-    contiguous parts rendered in separate processes (a renderer does not use a second core) and
-    joined chunk by chunk; the arrays are the same as with one worker.
+    """Render the replay's frames under `profile`. With `workers` > 1 this process renders and writes
+    beside `workers` - 1 helper processes (episodes/render_pool.py: started once per process and kept
+    across calls) that take frames from a shared counter; the file is byte-identical to one worker's.
 
     Returns frame counts and `seconds`: time per part of the work (summed over workers), which
     `b2d bench replay` reports."""
@@ -94,104 +90,64 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
     steps = frame_steps(num_steps, profile.rate_hz)[:max_frames]
     if not steps.size:
         raise ValueError(f"{replay_path}: no frames to render (max_frames={max_frames})")
-    parts = [p for p in np.array_split(steps, max(1, min(workers, len(steps) // MIN_FRAMES_PER_WORKER))) if p.size]
-    if len(parts) == 1:
-        stats = _render_steps(replay_path, profile, steps, out_path)
+    helpers, pool = max(0, min(workers, len(steps) // MIN_FRAMES_PER_WORKER) - 1), None
+    if helpers:
+        from episodes.render_pool import shared_helpers
+
+        try:
+            pool = shared_helpers(helpers)
+        except (OSError, RuntimeError) as exc:      # slower, not wrong: the same bytes from this process alone
+            log.warning("%s: render helpers did not start (%s); rendering in this process alone", replay_path, exc)
+    if pool is not None:
+        with pool.job(replay_path, profile, steps, helpers) as job:
+            stats = _render_steps(replay_path, profile, steps, out_path, job)
     else:
-        stats = _render_parts(replay_path, profile, parts, out_path)
+        stats = _render_steps(replay_path, profile, steps, out_path)
     return {"frames": int(len(steps)), "frame_errors": stats["errors"], "profile": profile.name,
-            "profile_hash": profile.content_hash, "workers": len(parts), "seconds": stats["seconds"],
-            "frame_windows": stats["frame_windows"], "setup_cpu_s": stats["setup_cpu_s"]}
+            "profile_hash": profile.content_hash, "workers": stats["workers"], "seconds": stats["seconds"],
+            "frame_windows": stats["frame_windows"], "setup_cpu_s": stats["setup_cpu_s"],
+            "helper_cpu_s": stats["helper_cpu_s"], "helper_frames": stats["helper_frames"]}
 
 
-MIN_FRAMES_PER_WORKER = 8    # below this, starting a process and a renderer costs more than it saves
+MIN_FRAMES_PER_WORKER = 8    # below this, a helper's scene and renderer cost more than it saves
 
 
-def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, out_path: Path) -> dict:
-    """Render the given control steps of a replay into one render file."""
+def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, out_path: Path, job=None) -> dict:
+    """Render the given control steps of a replay into one render file. With `job` (from
+    episodes.render_pool) helpers render part of the frames and this process writes them all, in order."""
     clock = time.perf_counter
     t0, cpu0 = clock(), time.process_time()
-    with h5py.File(replay_path, "r") as src:
-        scene = scene_for(_RawView(src), replay_path)
-        qpos = src["qpos"][int(steps[0]): int(steps[-1]) + 1]
-    model = scene.model
-    data = mujoco.MjData(model)
-    renderer = FrameRenderer(scene, profile)
-    seconds = {"setup": clock() - t0, "pose": 0.0, "write": 0.0}
+    frames = ReplayFrames(replay_path, profile, steps)
+    seconds = {"setup": clock() - t0, "write": 0.0}
     errors = 0
     try:
         t0 = clock()
-        with EpisodeWriter(out_path, {**renderer.static(), "render/frame_steps": steps}) as writer:
+        with EpisodeWriter(out_path, frames.static()) as writer:
             writer.file.attrs.update({"schema": RENDER_SCHEMA, "profile": profile.name,
                                       "profile_hash": profile.content_hash})
             seconds["setup"] += clock() - t0     # the file's static datasets: once per file
             setup_cpu = time.process_time() - cpu0   # this process's CPU seconds of the set-up (benchmarks)
             first = time.time()     # wall clock shared by processes: when this part's frames start (benchmarks)
-            for step in steps:
-                t0 = clock()
-                set_positions(model, data, qpos[step - steps[0]])
-                t1 = clock()
-                frame, error = renderer.capture(data)
-                errors += bool(error)
-                frame["render/frame_errors"] = error
+            ordered = job.in_order(frames) if job is not None else map(frames.capture, range(len(steps)))
+            for frame, error in ordered:
+                errors += error
                 t2 = clock()
                 writer.append(frame)
-                seconds["pose"] += t1 - t0
                 seconds["write"] += clock() - t2
+            last = time.time()
             t0 = clock()
         seconds["write"] += clock() - t0    # closing flushes the last chunks
     finally:
-        renderer.close()
-    return {"errors": errors, "seconds": {**seconds, **renderer.seconds()}, "frame_windows": [(first, time.time())],
-            "setup_cpu_s": setup_cpu}
-
-
-def _render_parts(replay_path: Path, profile: SensorProfile, parts: list[np.ndarray], out_path: Path) -> dict:
-    import multiprocessing
-    import shutil
-    from concurrent.futures import ProcessPoolExecutor
-
-    tmp = temporary_dir(out_path.parent, "render-parts")    # named with the pid: a later run cleans it after a kill
-    try:
-        part_paths = [tmp / f"part{i:03d}.render.h5" for i in range(len(parts))]
-        # spawn, not fork: a forked child would inherit the parent's GL context and h5py state
-        with ProcessPoolExecutor(len(parts), mp_context=multiprocessing.get_context("spawn"),
-                                 initializer=_render_worker_start, initargs=(os.getpid(),)) as pool:
-            stats = list(pool.map(_render_steps, [replay_path] * len(parts), [profile] * len(parts),
-                                  parts, part_paths))
-        t0 = time.perf_counter()
-        concat_frames(part_paths, out_path, frame_axis_datasets=("render/frame_steps",))
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    seconds: dict[str, float] = {"join": time.perf_counter() - t0}
-    for s in stats:
+        frames.close()
+    seconds.update(frames.seconds())
+    helped = job.stats if job is not None else []      # each helper's timings, when it took part
+    for s in helped:
         for key, value in s["seconds"].items():
             seconds[key] = seconds.get(key, 0.0) + value
-    return {"errors": sum(s["errors"] for s in stats), "seconds": seconds,
-            "frame_windows": [w for s in stats for w in s["frame_windows"]],
-            "setup_cpu_s": sum(s["setup_cpu_s"] for s in stats)}
-
-
-def _render_worker_start(parent_pid: int) -> None:
-    """Pool initializer of a render worker: one worker is meant for one core, so unless told otherwise
-    Mesa's software GL rasterizes on the worker's own thread (its default, a thread per core in every
-    worker, oversubscribes the cores) and OpenCV uses one thread. Neither changes a byte."""
-    import cv2
-
-    die_with_parent(parent_pid)
-    os.environ.setdefault("LP_NUM_THREADS", "0")     # read when the worker makes its GL context, after this
-    cv2.setNumThreads(1)
-
-
-class _RawView:
-    """The fields of a raw recording that `scene_for` needs, read from a replay file."""
-
-    def __init__(self, f: h5py.File):
-        self.task = f.attrs["task"]
-        self.embodiment = f.attrs["embodiment"]
-        self.scene_sample = f.attrs["scene_sample"]
-        self.actuator_names = json.loads(f.attrs["actuator_names"])
-        self.hand_model = str(f.attrs.get("hand_model", "generated"))
+    return {"errors": errors, "seconds": seconds, "workers": 1 + sum(bool(s["frame_windows"]) for s in helped),
+            "frame_windows": [(first, last)] + [w for s in helped for w in s["frame_windows"]],
+            "setup_cpu_s": setup_cpu + sum(s["setup_cpu_s"] for s in helped),
+            "helper_cpu_s": sum(s["cpu_s"] for s in helped), "helper_frames": sum(s["frames"] for s in helped)}
 
 
 # ---------------------------------------------------------------- assemble

@@ -1,0 +1,68 @@
+"""`b2d bench replay --workers N`: one episode's render on N workers against one worker, in the same run.
+
+The cores are shared with other processes, so beside wall-clock ratios every figure is also given in
+CPU seconds of each process taking part: the writing process and every helper. What a render would
+take on N idle cores is its critical path, the busiest process's CPU seconds (the helpers build their
+scene while the writer builds its own, then all take frames from one counter). The one- and N-worker
+renders alternate, so both see the same load.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import time
+from pathlib import Path
+
+from episodes.atomic import file_sha256
+from episodes.render_pool import shared_helpers
+from episodes.stages import render_to_file
+
+
+def parallel_render_figures(replay_path: Path, profile, workers: int, out_dir: Path, repeats: int = 3) -> dict:
+    """Start the helpers (once per process, timed), then `repeats` interleaved pairs of one-worker and
+    `workers`-worker renders of the same replay; medians, every run, and whether the files are the same."""
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    helpers = shared_helpers(workers - 1)
+    start_wall, start_parent_cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    runs: dict[int, list[dict]] = {1: [], workers: []}
+    for r in range(repeats):
+        for n in ((1, workers) if r % 2 == 0 else (workers, 1)):      # alternate which goes first
+            load = os.getloadavg()[0]
+            t0, cpu0 = time.perf_counter(), time.process_time()
+            info = render_to_file(replay_path, profile, out_dir / f"w{n}.render.h5", workers=n)
+            wall, own_cpu = time.perf_counter() - t0, time.process_time() - cpu0
+            helper_cpu = info["helper_cpu_s"]
+            runs[n].append({"wall_s": round(wall, 3), "writer_cpu_s": round(own_cpu, 3),
+                            "helpers_cpu_s": round(helper_cpu, 3), "cpu_s": round(own_cpu + helper_cpu, 3),
+                            "workers": info["workers"], "load_average_1min": round(load, 2),
+                            # on idle cores the busiest process sets the wall time
+                            "critical_path_cpu_s": round(max(own_cpu, helper_cpu / max(1, info["workers"] - 1)), 3)})
+    identical = file_sha256(out_dir / "w1.render.h5") == file_sha256(out_dir / f"w{workers}.render.h5")
+
+    def median(n: int, key: str) -> float:
+        return statistics.median(run[key] for run in runs[n])
+
+    one_cpu, many_cpu = median(1, "cpu_s"), median(workers, "cpu_s")
+    return {
+        "workers": workers, "frames": info["frames"], "repeats": repeats,
+        "speedup_vs_one_worker": round(median(1, "wall_s") / median(workers, "wall_s"), 3),
+        "speedup_on_idle_cores_from_cpu": round(one_cpu / median(workers, "critical_path_cpu_s"), 3),
+        "speedup_bound_from_cpu": round(workers * one_cpu / max(many_cpu, 1e-9), 3),
+        "render_cpu_s_one_worker": one_cpu, "render_cpu_s": many_cpu,
+        "sharing_cpu_s": round(many_cpu - one_cpu, 3),
+        "render_file_identical_to_one_worker": identical,
+        "join_s": 0.0,
+        "helpers_start_once": {"wall_s": round(start_wall, 3), "writer_cpu_s": round(start_parent_cpu, 3),
+                               "cpu_s_per_helper": {str(k): round(v, 3) for k, v in helpers.startup_cpu_s.items()}},
+        "runs": {str(n): r for n, r in runs.items()},
+        "note": ("one worker = the render in this process alone; N workers = this process (renders, writes every "
+                 "frame in order) and N-1 helper processes kept across calls, all taking frames from one counter; "
+                 "helpers_start_once = spawning them (interpreter, imports, GL), paid once per process, not per "
+                 "render; nothing is joined (join_s 0): the render file is written once, byte-identical to one "
+                 "worker's. speedup_vs_one_worker: wall clock, medians over interleaved repeats (counts other "
+                 "processes' load); speedup_on_idle_cores_from_cpu: one worker's CPU seconds over the busiest "
+                 "process's CPU seconds (the wall time on idle cores); speedup_bound_from_cpu: N x one worker's CPU "
+                 "over all processes' CPU; sharing_cpu_s: the CPU seconds sharing adds (each helper's scene and "
+                 "renderer, passing frames)"),
+    }

@@ -1,0 +1,368 @@
+"""Helper processes that render an episode's frames beside the process that writes them (issue 22).
+
+A render with N workers runs in the calling process and N-1 helpers. Every renderer takes the next
+frame index from one shared counter, so the frames split themselves by speed (the writing process,
+which also compresses and writes every frame, simply takes fewer); helpers send their frames to the
+caller, which writes all frames in order through the one-worker writer. The render file is therefore
+byte-identical to a one-worker render, and nothing is joined afterwards (joining parts cost ~1.4 s
+and a writer per part; each worker's start-up ~3 CPU-seconds).
+
+Helpers are spawned once per process and kept across render calls, so their imports and GL start-up
+are paid once. Each call builds the episode's scene and renderer in every helper it uses: a scene
+depends on the episode's scene sample (textures, lights, distractors, camera offsets), so there is
+nothing valid to keep between two episodes of one setting.
+
+Frames cross the process boundary through a pipe per helper, pickled in memory with their arrays
+beside the pickle (as `concurrent.futures` passes its work); nothing is read back from disk this way.
+"""
+
+from __future__ import annotations
+
+import atexit
+import logging
+import multiprocessing
+import multiprocessing.connection
+import os
+import pickle
+import queue
+import threading
+import time
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from episodes.workers import die_with_parent
+
+log = logging.getLogger(__name__)
+
+MAX_AHEAD = 8        # frames a renderer may start beyond the last one written (bounds the frames held in memory)
+WAIT_S = 0.002       # a helper held back by MAX_AHEAD looks again after this
+POLL_S = 1.0         # the writer checks that its helpers still live at this interval while it waits
+JOB, NEXT, TOTAL, WRITTEN = range(4)     # the shared counters
+
+
+def _take(lock, state, job: int, max_ahead: int) -> int | None:
+    """The next frame index of `job` for the calling renderer, or None when it has none left (or the
+    job ended); -1 when every index left is more than `max_ahead` beyond the last frame written."""
+    with lock:
+        if state[JOB] != job or state[NEXT] >= state[TOTAL]:
+            return None
+        i = state[NEXT]
+        if i >= state[WRITTEN] + max_ahead:
+            return -1
+        state[NEXT] = i + 1
+        return i
+
+
+# ---------------------------------------------------------------- helper process
+
+
+def _helper_main(index: int, tasks, conn, lock, state, parent_pid: int, max_ahead: int) -> None:
+    die_with_parent(parent_pid)
+    # one helper is meant for one core: Mesa's software GL rasterizes on this thread (its default, a
+    # thread per core in every process, oversubscribes the cores), OpenCV on one. Neither changes a byte.
+    os.environ.setdefault("LP_NUM_THREADS", "0")
+    import cv2
+
+    cv2.setNumThreads(1)
+    from episodes.replay_frames import ReplayFrames
+
+    out = _Sender(conn)
+    _warm_gl()
+    # this process's CPU seconds so far: interpreter, the imports spawn repeats (the parent's main
+    # module's too), GL start-up
+    out.send("ready", index, 0, None, time.process_time())
+    while (task := tasks.get()) is not None:
+        job, replay_path, profile, steps = task
+        cpu = time.process_time()
+        if state[JOB] != job:         # the writer finished without us: no scene to build
+            out.send("done", index, job, None, {"frames": 0, "seconds": {}, "frame_windows": [],
+                                                "setup_cpu_s": 0.0, "cpu_s": 0.0})
+            continue
+        try:
+            frames = ReplayFrames(Path(replay_path), profile, steps)
+        except BaseException as exc:     # reported to the writer, which renders this helper's share itself
+            out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
+            continue
+        setup_cpu, first, count = time.process_time() - cpu, time.time(), 0
+        try:
+            while (i := _take(lock, state, job, max_ahead)) is not None:
+                if i < 0:
+                    time.sleep(WAIT_S)
+                    continue
+                out.send("frame", index, job, i, frames.capture(i))
+                count += 1
+        except BaseException as exc:
+            out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
+            continue
+        finally:
+            frames.close()
+        out.send("done", index, job, None, {
+            "frames": count, "seconds": frames.seconds(), "frame_windows": [(first, time.time())],
+            "setup_cpu_s": setup_cpu, "cpu_s": time.process_time() - cpu})
+    out.close()
+
+
+class _Sender:
+    """Messages to the writer through this helper's own pipe, written by a thread so that rendering
+    goes on while the writer is busy. A pipe per helper: if a helper dies mid-message, the writer
+    reads end-of-file instead of waiting for the rest forever (as on a queue every helper writes to).
+
+    Arrays travel beside the pickle (protocol 5 out-of-band buffers): a paper frame is ~24 MB, and
+    pickling it whole cost ~17 ms each side where a copy costs ~3. They are copied here, at once,
+    as the next capture may reuse its buffers."""
+
+    def __init__(self, conn):
+        self._conn, self._queue = conn, queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, name="render-helper-sender", daemon=True)
+        self._thread.start()
+
+    def send(self, *message) -> None:
+        buffers: list[pickle.PickleBuffer] = []
+        head = pickle.dumps(message, 5, buffer_callback=buffers.append)
+        self._queue.put([head, *(bytes(b.raw()) for b in buffers)])
+
+    def _run(self) -> None:
+        while (parts := self._queue.get()) is not None:
+            self._conn.send_bytes(np.array([len(p) for p in parts], np.int64).tobytes())
+            for part in parts:
+                self._conn.send_bytes(part)
+
+    def close(self) -> None:
+        self._queue.put(None)
+        self._thread.join()
+        self._conn.close()
+
+
+def _warm_gl() -> None:
+    """Make and drop one tiny GL context, so the display and driver start-up is not paid by the
+    first episode."""
+    try:
+        import mujoco
+
+        from sim.offscreen import OffscreenRenderer
+
+        model = mujoco.MjModel.from_xml_string(
+            '<mujoco><worldbody><light pos="0 0 2"/><camera name="c" pos="0 0 1"/><geom size="0.1"/>'
+            '</worldbody></mujoco>')
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        renderer = OffscreenRenderer(model, 8, 8)
+        try:
+            renderer.update(data, 0)
+            renderer.depth_and_geoms(True)
+        finally:
+            renderer.close()
+    except Exception:       # only a warm-up: the first real renderer reports any real failure
+        log.debug("render helper GL warm-up failed", exc_info=True)
+
+
+# ---------------------------------------------------------------- writer side
+
+
+class RenderHelpers:
+    """`count` helper processes, started now and kept until `close()`."""
+
+    def __init__(self, count: int, max_ahead: int = MAX_AHEAD):
+        if count < 1:
+            raise ValueError(f"render helpers: expected at least 1, got {count}")
+        ctx = multiprocessing.get_context("spawn")   # a forked child would inherit GL and h5py state
+        self.owner = os.getpid()
+        self.count, self.max_ahead = count, max_ahead
+        self._lock, self._state = ctx.Lock(), ctx.RawArray("q", 4)
+        self._tasks = [ctx.SimpleQueue() for _ in range(count)]
+        self._readers, self._procs = [], []
+        for k in range(count):
+            reader, writer = ctx.Pipe(duplex=False)
+            self._procs.append(ctx.Process(target=_helper_main, name=f"b2d-render-helper-{k}", daemon=True,
+                                           args=(k, self._tasks[k], writer, self._lock, self._state, os.getpid(),
+                                                 max_ahead)))
+            self._procs[-1].start()
+            writer.close()      # the helper's end only: its death is then end-of-file here
+            self._readers.append(reader)
+        self._lost: set[int] = set()     # helpers whose pipe ended or broke
+        self._jobs = 0
+        self._busy = threading.Lock()
+        self.startup_cpu_s: dict[int, float] = {}     # per helper: CPU seconds of its start (imports, GL)
+
+    def alive(self) -> bool:
+        return not self._lost and all(p.is_alive() for p in self._procs)
+
+    def wait_ready(self, timeout: float = 120.0) -> dict[int, float]:
+        """Block until every helper has started (imports, GL); their start-up CPU seconds."""
+        deadline = time.monotonic() + timeout
+        while len(self.startup_cpu_s) < self.count:
+            if time.monotonic() > deadline or not self._receive(set(range(self.count)), 0, {}, [], POLL_S):
+                raise RuntimeError(f"render helpers: {self.count - len(self.startup_cpu_s)} of {self.count} "
+                                   f"did not start within {timeout:.0f} s")
+        return dict(self.startup_cpu_s)
+
+    @contextmanager
+    def job(self, replay_path: Path, profile, steps: np.ndarray, helpers: int):
+        """Hand the frames of `steps` to up to `helpers` helpers; yields a `_Job` (None when another
+        thread's render is using them: render alone then). The helpers start building their scene
+        at once, while the caller builds its own."""
+        if not self._busy.acquire(blocking=False):
+            yield None
+            return
+        try:
+            self._jobs += 1
+            job = _Job(self, self._jobs, len(steps))
+            with self._lock:
+                self._state[:] = [job.id, 0, len(steps), 0]
+            for k in range(min(helpers, self.count)):
+                if k not in self._lost and self._procs[k].is_alive():
+                    self._tasks[k].put((job.id, str(replay_path), profile, np.asarray(steps)))
+                    job.open.add(k)
+            try:
+                yield job
+            finally:
+                with self._lock:
+                    self._state[JOB] = 0      # helpers stop taking this job's frames
+        finally:
+            self._busy.release()
+
+    def _receive(self, helpers: set[int], job: int, pending: dict, stats: list, timeout: float) -> bool:
+        """Read every message waiting from `helpers` (after up to `timeout` s for the first); frames
+        of `job` go to `pending`, its helpers' final timings to `stats` (and out of `helpers`). False
+        when one of them failed or died."""
+        readers = {self._readers[k]: k for k in helpers if k not in self._lost}
+        if len(readers) < len(helpers):
+            return False
+        ready = multiprocessing.connection.wait(list(readers), timeout)
+        if not ready:
+            return all(self._procs[k].is_alive() for k in helpers)
+        ok = True
+        for reader in ready:
+            k = readers[reader]
+            try:
+                while reader.poll():
+                    ok &= self._handle(_receive_message(reader), job, pending, helpers, stats)
+            except (EOFError, OSError):        # it died, perhaps mid-message
+                self._lost.add(k)
+                helpers.discard(k)
+                ok = False
+        return ok
+
+    def _handle(self, message, job: int, pending: dict, helpers: set, stats: list) -> bool:
+        kind, helper, of_job, i, payload = message
+        if kind == "ready":
+            self.startup_cpu_s[helper] = payload
+        elif of_job != job:
+            pass                              # left over from an earlier job
+        elif kind == "frame":
+            pending.setdefault(i, payload)
+        elif kind == "done":
+            helpers.discard(helper)
+            stats.append(payload)
+        elif kind == "error":
+            helpers.discard(helper)
+            log.warning("render helper %d failed; the writing process renders its frames: %s", helper, payload)
+            return False
+        return True
+
+    def close(self) -> None:
+        for p, tasks in zip(self._procs, self._tasks):
+            if p.is_alive():
+                try:
+                    tasks.put(None)
+                except (OSError, ValueError):
+                    pass
+        for p in self._procs:
+            p.join(timeout=5)
+            if p.is_alive():
+                p.kill()
+                p.join(timeout=5)
+        for reader in self._readers:
+            reader.close()
+
+
+def _receive_message(reader):
+    """One message of a `_Sender`: the sizes of its parts, its pickle, then its arrays' bytes, each read
+    into a buffer of its own (aligned and writable, as the arrays it becomes)."""
+    sizes = np.frombuffer(reader.recv_bytes(), np.int64)
+    head, buffers = reader.recv_bytes(), []
+    for size in sizes[1:]:
+        buffers.append(bytearray(int(size)))
+        reader.recv_bytes_into(buffers[-1])
+    return pickle.loads(head, buffers=buffers)
+
+
+class _Job:
+    def __init__(self, helpers: RenderHelpers, job_id: int, total: int):
+        self.helpers, self.id, self.total = helpers, job_id, total
+        self.open: set[int] = set()       # helpers handed the job that have not reported its end
+        self.stats: list[dict] = []
+
+    def in_order(self, local) -> Iterator[tuple[dict, bool]]:
+        """Every frame as (datasets, has error), in index order: the caller's own renderer `local`
+        (a ReplayFrames) renders its share, helpers the rest. Should a helper fail or die, the
+        caller renders whatever has not arrived (the same frames, only slower)."""
+        h, pending, written, alone = self.helpers, {}, 0, not self.open
+        while written < self.total:
+            if not alone and self.open:
+                alone = not h._receive(self.open, self.id, pending, self.stats, 0)
+            if written in pending:
+                yield pending.pop(written)
+                written += 1
+                with h._lock:
+                    h._state[WRITTEN] = written
+                continue
+            if alone:
+                pending[written] = local.capture(written)
+                continue
+            i = _take(h._lock, h._state, self.id, h.max_ahead)
+            if i is not None and i >= 0:
+                pending[i] = local.capture(i)
+            elif i is None and not self.open:
+                alone = True      # a frame taken by a helper that failed: ours now
+            else:
+                alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
+            if alone:
+                with h._lock:
+                    h._state[JOB] = 0       # the others stop too; what is missing is rendered here
+        with h._lock:
+            h._state[JOB] = 0       # a helper still building its scene skips the job
+        while self.open and not alone:  # their timings, for benchmarks (they end within a frame)
+            alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
+
+
+# ---------------------------------------------------------------- one set per process
+
+_shared: RenderHelpers | None = None
+_shared_lock = threading.Lock()
+
+
+def shared_helpers(count: int) -> RenderHelpers:
+    """This process's helpers (at least `count`), started on first use and kept until it exits; a
+    set with a dead helper (killed, or its starting thread ended: the kernel then ends it) is
+    replaced."""
+    global _shared
+    with _shared_lock:
+        pool = _shared
+        if pool is not None and pool.owner != os.getpid():
+            pool = None       # inherited through fork: another process's helpers
+        if pool is not None and (pool.count < count or not pool.alive()):
+            pool.close()
+            pool = None
+        _shared = None
+        if pool is None:
+            pool = RenderHelpers(count)
+            try:
+                pool.wait_ready()     # their imports and GL start-up, once: then every call finds them warm
+            except BaseException:
+                pool.close()
+                raise
+        _shared = pool
+        return pool
+
+
+@atexit.register
+def close_shared_helpers() -> None:
+    global _shared
+    with _shared_lock:
+        if _shared is not None and _shared.owner == os.getpid():
+            _shared.close()
+        _shared = None
