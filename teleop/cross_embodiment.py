@@ -26,13 +26,12 @@ from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS, record_demonstrations
 from teleop.recorder import episode_horizon, home
-from teleop.scripted_operator import ScriptedOperator
+from teleop.scripted_operator import IK_ITERS, ScriptedOperator
 
 log = logging.getLogger(__name__)
 ALL = "all"
 GOAL_EMBODIMENTS = 4            # the issue's goal: a majority of seeds on at least this many embodiments
 OFF_PATH_M = 0.01               # dry run: a step whose tracked wrist is this far from the plan is off the path
-DRY_RUN_IK_ITERS = 30           # as ScriptedOperator.act
 FRESH_IK_ITERS = 300            # the worst pose solved from home (as sim/scene/reach.py)
 
 
@@ -68,11 +67,13 @@ def parse_tasks(keys: list[str] | tuple[str, ...] | None) -> list[str]:
 def plan_reach(task: str, embodiment: str, index: int = 0) -> dict:
     """Kinematic dry run of the task's plan on the embodiment, demonstration ``index``'s scene: the
     operator plans its timeline on the homed scene, then each side's arm IK tracks the planned wrist
-    pose step by step (warm-started, as ``ScriptedOperator.act``), without physics, up to the end of the
-    plan's last step (the return home after it comes after the evaluator's reach-and-stop) or the
-    episode horizon, whichever is first. Reports, per side, the worst position error, how many steps
-    end more than OFF_PATH_M off the plan, and the worst pose's error when solved afresh from home
-    (small: the tracking lost its IK branch on the way; large: the pose is out of the arm's reach).
+    pose step by step (warm-started, solved again from home on a miss, as ``ScriptedOperator.act``),
+    without physics, up to the end of the plan's last step (the return home after it comes after the
+    evaluator's reach-and-stop) or the episode horizon, whichever is first. Reports, per side, the
+    worst position error, how many steps end more than OFF_PATH_M off the plan, on how many steps the
+    solve from home was kept (``from_home_steps``), and the worst pose's error when solved afresh from
+    home with more iterations (small: the tracking lost its IK branch on the way; large: the pose is
+    out of the arm's reach).
     Every step is tracked: a warm start two steps old already sends the xArm7 into other branches."""
     scene = demonstration_scene(task, embodiment, index)
     data = home(scene)
@@ -82,20 +83,23 @@ def plan_reach(task: str, embodiment: str, index: int = 0) -> dict:
     out = {}
     for name, side in operator.sides.items():
         kin, q = side["kin"], side["q"].copy()
-        worst, worst_step, off = 0.0, 0, 0
+        worst, worst_step, off, from_home = 0.0, 0, 0, 0
         frames = side["timeline"].frames
         steps = range(0, min(frames[-2].end_step if len(frames) > 1 else 0, horizon))
         for step in steps:
             pos, quat, _ = side["timeline"].at(step)
-            result = kin.ik(pos, quat, q, max_iters=DRY_RUN_IK_ITERS)
+            warm = kin.ik(pos, quat, q, max_iters=IK_ITERS)
+            result = kin.ik_again_from(warm, pos, quat, side["q_home"], max_iters=IK_ITERS)
+            from_home += result is not warm
             q = result.q
             if result.pos_err_m > worst:
                 worst, worst_step = result.pos_err_m, step
             off += result.pos_err_m > OFF_PATH_M
         pos, quat, _ = side["timeline"].at(worst_step)
-        fresh = kin.ik(pos, quat, side["q"], max_iters=FRESH_IK_ITERS)
+        fresh = kin.ik(pos, quat, side["q_home"], max_iters=FRESH_IK_ITERS)
         out[name] = {"worst_m": round(worst, 4), "worst_step": worst_step, "off_path_steps": off,
-                     "tracked_steps": len(steps), "worst_from_home_m": round(fresh.pos_err_m, 4)}
+                     "from_home_steps": from_home, "tracked_steps": len(steps),
+                     "worst_from_home_m": round(fresh.pos_err_m, 4)}
     return out
 
 

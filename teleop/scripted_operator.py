@@ -27,6 +27,7 @@ from teleop.transit import hand_outline, bounding_box_points, obstacles, transit
 
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
 STAGGER_STEPS = 120           # the left hand starts later so the hands never meet over a target
+IK_ITERS = 30                 # per control step, warm-started: the plan moves the wrist little per step
 SETTLE_STEPS = 120            # after the last release; reach-and-stop ends earlier on success
 
 
@@ -86,7 +87,8 @@ class ScriptedOperator:
                                 "closed": closed, "group": group, "grasp_centre": grasp.centre,
                                 "pinch_close": np.clip(pinch.close, lo, hi), "hand": hand.name,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
-                                "looks": [], "q": q_home.copy(), "timeline": SideTimeline(pos0, quat0, open_, start),
+                                "looks": [], "q": q_home.copy(), "q_home": q_home.copy(),
+                                "timeline": SideTimeline(pos0, quat0, open_, start),
                                 "home": (pos0, quat0), "name": side}
         ends: list[int] = []         # each step's last control step
         for item in scene.task.demo_plan:
@@ -219,7 +221,9 @@ class ScriptedOperator:
         ctrl = self.ctrl_home.copy()
         for name, (pos, quat, hand) in self.intent(step, data).items():
             side = self.sides[name]
-            result = side["kin"].ik(pos, quat, side["q"], max_iters=30)
+            kin = side["kin"]
+            result = kin.ik(pos, quat, side["q"], max_iters=IK_ITERS)
+            result = kin.ik_again_from(result, pos, quat, side["q_home"], max_iters=IK_ITERS)
             side["q"] = result.q
             ctrl[side["arm_ids"]] = result.q
             ctrl[side["hand_ids"]] = hand

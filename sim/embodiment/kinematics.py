@@ -19,6 +19,7 @@ from .mirror import side_links, side_transform
 
 POS_TOL_M = 2e-3
 ROT_TOL_RAD = math.radians(2.0)
+AGAIN_CLOSER = 0.5      # ik_again_from: a miss solved from home must come this much closer to be kept
 
 
 def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
@@ -69,6 +70,11 @@ class IKResult:
     pos_err_m: float
     rot_err_rad: float
     iterations: int
+
+    @property
+    def miss(self) -> float:
+        """How far off the pose is in units of the success tolerances (<= 1: success)."""
+        return max(self.pos_err_m / POS_TOL_M, self.rot_err_rad / ROT_TOL_RAD)
 
 
 class ArmKinematics:
@@ -163,3 +169,18 @@ class ArmKinematics:
         re = float(np.linalg.norm(pin.log3(target.rotation @ T.rotation.T)))
         return IKResult(q=q, success=bool(pe <= POS_TOL_M and re <= ROT_TOL_RAD), pos_err_m=pe,
                         rot_err_rad=re, iterations=it)
+
+    def ik_again_from(self, result: IKResult, target_pos, target_quat_wxyz, q_seed, max_iters: int = 200) -> IKResult:
+        """``result`` (a warm-started ``ik`` of the same target) if it succeeded; else the target solved
+        again from ``q_seed`` (the arm's home), kept if it reaches the pose or comes at least
+        1 / AGAIN_CLOSER times closer (``IKResult.miss``). A warm start keeps the arm on its current
+        branch, which a smooth path wants, but once a path has dragged the arm against its joint limits
+        the warm start may never leave that branch again (the xArm7 tracking condiment_box_loading's
+        plan: up to 115 cm off, 447 steps more than 1 cm off; with this, 8 cm and 10 steps); home is
+        where every path starts. A pose out of reach from both stays with the warm start: a marginally
+        closer solve from home would only swing the arm over to another branch. Only a miss is solved
+        again, so a path the warm start follows is unchanged bit for bit."""
+        if result.success:
+            return result
+        again = self.ik(target_pos, target_quat_wxyz, q_seed, max_iters=max_iters)
+        return again if again.success or again.miss < AGAIN_CLOSER * result.miss else result

@@ -110,6 +110,8 @@ class TeleopCommander:
         result = s.kin.ik(target.pos, quat, s.arm_q, max_iters=FAST_IK_ITERS)
         if not result.success:      # continue where the fast try stopped: the same 300 iterations in all
             result = s.kin.ik(target.pos, quat, result.q, max_iters=SLOW_IK_ITERS - FAST_IK_ITERS)
+        # the warm start may have lost the arm's branch on the way: the same pose from home
+        result = s.kin.ik_again_from(result, target.pos, quat, s.home_arm, max_iters=SLOW_IK_ITERS)
         if not result.success:
             return False, (f"{s.name} wrist: unreachable (IK {result.pos_err_m * 1000:.1f} mm / "
                            f"{np.degrees(result.rot_err_rad):.1f} deg off); last arm target held")
