@@ -22,11 +22,17 @@ TABLE_TARGET = "table"      # place: table puts an object down at place_offset [
 PLAN_GRASPS = ("power", "pinch")
 # `pick` also takes flat_pinch: the fingertips to the table beside a thin object lying flat
 PICK_GRASPS = (*PLAN_GRASPS, "flat_pinch")
-PINCHES = ("pinch", "flat_pinch")      # grasps that find their own hold: no grasp_point
+PINCHES = ("pinch", "flat_pinch")      # grasps that find their own hold: no grasp_point (but a pick's pinch may take one)
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
 HANDS = ("left", "right")
+PLACE_FROM_FRONT = "front"
+PLACE_FROM = ("above", PLACE_FROM_FRONT)   # pick's place_from: lowered from above, or slid in through a side opening
 BOTH_HANDS = "both"          # `hand: both`: a step of both hands at once (kinds in BOTH_HANDS_KINDS)
+# every kind's: wait_s, seconds the step waits after the steps in `after` end (or the episode starts),
+# e.g. one hand closes a lid while the other is still putting the bottle it poured from away
+COMMON_FIELDS = ("wait_s",)
+WAIT_RANGE_S = (0.0, 60.0)
 
 
 @dataclass(frozen=True)
@@ -45,7 +51,7 @@ class StepKind:
 
     @property
     def fields(self) -> tuple[str, ...]:
-        return self.required + self.optional
+        return self.required + self.optional + COMMON_FIELDS
 
 
 def _is_number(value) -> bool:
@@ -75,9 +81,10 @@ def _check_approach_pitch(path, where: str, step: dict) -> None:
 
 
 def _check_grasp(path, where: str, step: dict, grasps: tuple[str, ...] = PLAN_GRASPS, default: str = "power",
-                 across: bool = True) -> None:
+                 across: bool = True, part_pinch: bool = False) -> None:
     """How a step that picks something up holds it: [grasp] (one of ``grasps``), [approach_pitch_deg],
-    [grasp_yaw] (degrees, or with ``across`` also "across"), [grasp_point] (not with a pinch)."""
+    [grasp_yaw] (degrees, or with ``across`` also "across"), [grasp_point] (not with a pinch; with
+    ``part_pinch``, a pinch closes on the part there, not flat_pinch)."""
     grasp = step.get("grasp", default)
     if grasp not in grasps:
         raise SpecError(path, f"{where}.grasp", f"one of {list(grasps)}", grasp)
@@ -87,7 +94,7 @@ def _check_grasp(path, where: str, step: dict, grasps: tuple[str, ...] = PLAN_GR
         expected = f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]" if across else "degrees in [-180, 180]"
         raise SpecError(path, f"{where}.grasp_yaw", expected, yaw)
     _check_vector(path, where, step, "grasp_point", (3,), "[x, y, z] in the object's frame, metres")
-    if "grasp_point" in step and grasp in PINCHES:
+    if "grasp_point" in step and grasp in (("flat_pinch",) if part_pinch else PINCHES):
         raise SpecError(path, f"{where}.grasp_point", f"no grasp_point with grasp: {grasp} (the pinch finds its own)",
                         step["grasp_point"])
     if "approach_pitch_deg" in step and grasp == "flat_pinch":
@@ -96,15 +103,26 @@ def _check_grasp(path, where: str, step: dict, grasps: tuple[str, ...] = PLAN_GR
 
 
 def _check_pick(path, where: str, step: dict, scope: PlanScope) -> None:
-    """{hand, pick, place, [place_offset], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
-    [after]}: place is an object, or `table` with place_offset the spot on the table top to set the
-    object down at; grasp_yaw turns the hand about the vertical (degrees, or "across" the object's
-    narrow side); grasp_point is where a power grasp closes, in the object's frame; grasp: flat_pinch
-    picks a thin object lying flat with the fingertips (no grasp_point, no approach_pitch_deg)."""
+    """{hand, pick, place, [place_offset], [place_from], [grasp], [approach_pitch_deg], [grasp_yaw],
+    [grasp_point], [after]}: place is an object, or `table` with place_offset the spot on the table top
+    to set the object down at; place_from: front slides the object in level through the side a
+    container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor),
+    rather than lowering it from above; grasp_yaw turns the hand about the vertical (degrees, or
+    "across" the object's narrow side); grasp_point is where a power grasp closes, or the part a pinch
+    closes on (a bowl's rim), in the object's frame; grasp: flat_pinch picks a thin object lying flat
+    with the fingertips (no grasp_point, no approach_pitch_deg)."""
     _check_object(path, where, step, "pick", scope.objects)
     _check_object(path, where, step, "place", scope.objects, extra=(TABLE_TARGET,))
+    place_from = step.get("place_from", PLACE_FROM[0])
+    if place_from not in PLACE_FROM:
+        raise SpecError(path, f"{where}.place_from", f"one of {list(PLACE_FROM)}", place_from)
+    if place_from == PLACE_FROM_FRONT:
+        containers = sorted(n for n, o in scope.objects.items() if o.interior_half_extents is not None)
+        if step["place"] not in containers:
+            raise SpecError(path, f"{where}.place", f"with place_from: front, a container from {containers}",
+                            step["place"])
     _check_vector(path, where, step, "place_offset", (2, 3), "[dx, dy] or [dx, dy, dz] in metres")
-    _check_grasp(path, where, step, PICK_GRASPS)
+    _check_grasp(path, where, step, PICK_GRASPS, part_pinch=True)
 
 
 DRAG_HOOK_DEPTH_M = 0.02   # drag: curled fingertips this far below the container's rim
@@ -174,8 +192,9 @@ def _check_pour(path, where: str, step: dict, scope: PlanScope) -> None:
 
 
 def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
-    """{hand, turn: <object>/<link>, to: <angle, rad>, [after]}: swing a hinge-jointed link (a lid, a
-    door) to an angle within its joint range."""
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [after]}: swing a hinge-jointed link
+    (a lid, a door) to an angle within its joint range; from the link angle palm_from on (rad, within
+    the range) the flat palm pushes, fingers along the hinge, instead of the fingertips."""
     hinges = {f"{n}/{link.name}": link.joint.range for n, o in scope.objects.items() for link in o.links
               if link.joint.type == "hinge"}
     if not isinstance(step["turn"], str) or step["turn"] not in hinges:
@@ -183,6 +202,9 @@ def _check_turn(path, where: str, step: dict, scope: PlanScope) -> None:
     lo, hi = hinges[step["turn"]]
     if not _is_number(step["to"]) or not lo <= step["to"] <= hi:
         raise SpecError(path, f"{where}.to", f"an angle in rad within the joint range [{lo:g}, {hi:g}]", step["to"])
+    if "palm_from" in step and not (_is_number(step["palm_from"]) and lo <= step["palm_from"] <= hi):
+        raise SpecError(path, f"{where}.palm_from", f"an angle in rad within the joint range [{lo:g}, {hi:g}]",
+                        step["palm_from"])
 
 
 def _check_strike(path, where: str, step: dict, scope: PlanScope) -> None:
@@ -209,9 +231,10 @@ BOTH_HANDS_KINDS = ("carry",)   # kinds whose step takes `hand: both`
 
 
 def _check_carry(path, where: str, step: dict, scope: PlanScope) -> None:
-    """{hand: both, carry, place, [place_offset], [grasp_height], [after]}: both palms squeeze the object
-    from opposite sides and carry it onto/into `place` (place_offset as for pick); grasp_height
-    (metres from its centre, within its half height) is where the palms press."""
+    """{hand: both, carry, place, [place_offset], [grasp_height], [return_home], [after]}: both palms
+    squeeze the object from opposite sides and carry it onto/into `place` (place_offset as for pick);
+    grasp_height (metres from its centre, within its half height) is where the palms press;
+    return_home: true sends both hands back to their home pose after letting go."""
     if step["hand"] != BOTH_HANDS:
         raise SpecError(path, f"{where}.hand", f"{BOTH_HANDS!r} (a carry takes both hands)", step["hand"])
     _check_object(path, where, step, "carry", scope.objects)
@@ -223,19 +246,23 @@ def _check_carry(path, where: str, step: dict, scope: PlanScope) -> None:
     if not _is_number(height) or abs(height) > half_z:
         raise SpecError(path, f"{where}.grasp_height", f"metres from the object's centre in [{-half_z:g}, {half_z:g}]",
                         height)
+    if not isinstance(step.get("return_home", False), bool):    # after letting go, both hands go back home
+        raise SpecError(path, f"{where}.return_home", "true or false", step["return_home"])
 
 
 STEP_KINDS: dict[str, StepKind] = {
     "pick": StepKind(("hand", "pick", "place"),
-                     ("place_offset", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "after"), _check_pick),
+                     ("place_offset", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "after", "place_from"),
+                     _check_pick),
     "drag": StepKind(("hand", "drag", "to_zone"), ("place_offset", "hook_depth", "pitch_deg", "hook_closure", "after"),
                      _check_drag),
     "pour": StepKind(("hand", "pour", "into"),
                      ("tilt_deg", "grasp", "approach_pitch_deg", "grasp_yaw", "grasp_point", "place_offset", "after"),
                      _check_pour),
     "press": StepKind(("hand", "press"), ("after",), _check_press),
-    "turn": StepKind(("hand", "turn", "to"), ("after",), _check_turn),
-    "carry": StepKind(("hand", "carry", "place"), ("place_offset", "grasp_height", "after"), _check_carry),
+    "turn": StepKind(("hand", "turn", "to"), ("palm_from", "after"), _check_turn),
+    "carry": StepKind(("hand", "carry", "place"), ("place_offset", "grasp_height", "after", "return_home"),
+                      _check_carry),
     "strike": StepKind(("hand", "strike", "tool", "strike_point", "place"),
                        ("place_offset", "grasp", "grasp_point", "grasp_yaw", "approach_pitch_deg", "after"), _check_strike),
 }
@@ -249,7 +276,8 @@ def step_kind(step: dict) -> str:
 
 def parse_plan(path, raw: dict, scope: PlanScope) -> list[dict]:
     """The task's `demo_plan`, every step checked. `after` lists earlier steps (by index) that must
-    end before this one starts (the two hands otherwise work at once)."""
+    end before this one starts (the two hands otherwise work at once); `wait_s` holds it that many
+    seconds longer."""
     plan = raw.get("demo_plan") or []
     if not isinstance(plan, list):
         raise SpecError(path, "demo_plan", f"a list of steps {PLAN_STEP}", plan)
@@ -273,5 +301,8 @@ def parse_plan(path, raw: dict, scope: PlanScope) -> list[dict]:
         if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < i
                                                   for j in after):
             raise SpecError(path, f"{where}.after", f"a list of earlier step indices (0..{i - 1})", after)
+        lo, hi = WAIT_RANGE_S
+        if "wait_s" in step and not (_is_number(step["wait_s"]) and lo <= step["wait_s"] <= hi):
+            raise SpecError(path, f"{where}.wait_s", f"seconds in [{lo:g}, {hi:g}]", step["wait_s"])
         kind.check(path, where, step, scope)
     return plan

@@ -17,6 +17,7 @@ import mujoco
 import numpy as np
 
 from sim.demo_plan import BOTH_HANDS, step_kind
+from sim.physics import CONTROL_HZ
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
@@ -95,6 +96,7 @@ class ScriptedOperator:
             # `hand: both` (sim/demo_plan.py BOTH_HANDS): both timelines start together, once both are free
             tls = [s["timeline"] for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)]
             wait_until = max((ends[j] for j in item.get("after", [])), default=0)
+            wait_until += round(item.get("wait_s", 0.0) * CONTROL_HZ)     # opt-in: a pause after those
             if len(tls) > 1:
                 wait_until = max(wait_until, *(tl.end for tl in tls))
             for tl in tls:

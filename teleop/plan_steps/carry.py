@@ -5,7 +5,8 @@ facing each other (thumbs up, fingers pointing away from the body, turned in a l
 object's horizontal axis nearest the line between the two arms (each hand stays on its own side),
 at `grasp_height` above its centre (above its centre of mass it hangs between them rather than
 tipping out). The palms press in (the squeeze holds the weight by friction), both lift it clear of
-the target, carry it over, lower it to `place_offset` (as `pick`'s), let go, move apart and rise.
+the target, carry it over, lower it to `place_offset` (as `pick`'s), let go, move apart and rise;
+with `return_home`, both then go back to their home poses.
 Both hands' timelines start together (teleop/scripted_operator.py waits for both to be free) and
 their keyframes share the same steps, so the object is never pulled apart.
 """
@@ -42,6 +43,7 @@ FINGER_CLOSURE = 0.0
 SQUEEZE_STEPS = 40
 CARRY_STEPS = 200             # slow: a faster carry swung the object about the palms' axis
 CARRY_CLEARANCE_M = 0.06      # its bottom above the target's top while carried: it sags in the palms
+HOME_APART_M = 0.1            # return_home: each hand this much further out before it turns for home
 
 
 def knuckle_reach(hand: HandDescription) -> float:
@@ -115,5 +117,12 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         tl.add(SQUEEZE_STEPS, pos=over + out * (SQUEEZE_M + SPREAD_M))
         tl.add(DURATIONS["retreat"], pos=over + out * (SQUEEZE_M + SPREAD_M) + APPROACH_HEIGHT_M * UP)
         op.look_again(side, item["place"], data, carry, len(tl.frames))
+        if item.get("return_home", False):
+            # a person lowers their arms after setting a heavy thing down: the next step sets off from
+            # home rather than from wherever the carry left the arm (the xArm7 holding the cleaner
+            # ended on a branch from which the soap's pinch was 4 cm out of reach). The hands part
+            # first: turning palm down beside the object, the fingers swept its top and tipped it.
+            tl.add(DURATIONS["retreat"], pos=tl.frames[-1].pos + out * HOME_APART_M)
+            tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], hand=side["open"])
         # no slip correction before lowering (pick makes one): each palm rests about SQUEEZE_M outside
         # the target it is aimed at, so a correction would read that as slip and open the squeeze

@@ -15,14 +15,16 @@ import functools
 import mujoco
 import numpy as np
 
-from sim.demo_plan import GRASP_YAW_ACROSS, TABLE_TARGET
+from sim.demo_plan import GRASP_YAW_ACROSS, PLACE_FROM_FRONT, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
+from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
+from teleop.plan_steps.part_pinch import part_width
 from teleop.transit import bounding_box_points, hand_outline
 
 
@@ -123,7 +125,8 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
 
 def grasp_point(item: dict) -> np.ndarray:
     """A plan step's `grasp_point` [x, y, z] (object frame, metres): where the hand closes, for an
-    object held by a part (a pan by its handle); default its centre. Power grasps only."""
+    object held by a part (a pan by its handle); default its centre. Power grasps, and pinches (the pads
+    close on the part there: teleop/plan_steps/part_pinch.py)."""
     return np.asarray(item.get("grasp_point", [0.0, 0.0, 0.0]), float)
 
 
@@ -184,8 +187,12 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         axis = pinch_axis_in_site_frame(side["hand"])
         axis = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
         width = 2.0 * float(np.abs(body_rot.T @ axis) @ obj.half_extents) + PINCH_SPREAD_MARGIN_M
+        at = body_rot @ grasp_point(item)     # with a grasp_point: the pads close on the part there (part_pinch.py)
+        if "grasp_point" in item:
+            width = part_width(op.scene.model, data, op.scene.object_body_ids[name], op.object_pos(data, name) + at,
+                               axis) + PINCH_SPREAD_MARGIN_M
         ready, centre = pinch_preshape(side["hand"], open_, side["pinch_close"], width)
-        offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre)
+        offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre) - at
         closing = [(DURATIONS["close"] + DURATIONS["close_late"], side["pinch_close"], None)]
     else:
         # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
@@ -317,4 +324,8 @@ def look_in_hand(op: PlanningOperator, data: mujoco.MjData, side: dict, name: st
 
 
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
-    carry_and_place(op, data, item, item["pick"], grasp_and_lift(op, data, item, item["pick"]))
+    offset = grasp_and_lift(op, data, item, item["pick"])
+    if item.get("place_from") == PLACE_FROM_FRONT:      # slid in through a side opening (front_place.py)
+        carry_and_place_front(op, data, item, item["pick"], offset)
+    else:
+        carry_and_place(op, data, item, item["pick"], offset)

@@ -16,7 +16,8 @@ A link centred on its hinge (a screen swivelling about its middle) is pushed at 
 whose face looks towards the hand. A link swinging towards the hand (a door opening outwards) is
 pulled by its handle, a bar standing off its face: the fingers come down along the hinge axis into
 the gap behind the bar and the pads draw it round; shutting it again from in front, the fingers come
-down in front of the bar the same way and push it back.
+down in front of the bar the same way and push it back. With `palm_from` (opt-in) the fingers lie
+along the hinge all the way and from that angle on the flat palm pushes (teleop/plan_steps/palm_push.py).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from sim.errors import SpecError
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, axis_rotation, quat
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
 from teleop.plan_steps.operator import PlanningOperator
+from teleop.plan_steps.palm_push import PALM_REACH, finger_tips, innermost, palm_frame, palm_point, palm_turns
 
 
 TILTS_DEG = (45.0, 30.0, 15.0, 0.0)  # fingers tilted from the push direction towards the hinge: at first the tips
@@ -71,24 +73,34 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     # (a bar standing off the face) and the pads pull it round
     handle = link.rotated(link.handle, start - link.angle)     # where an earlier turn left it
     pull = float(way * link.tangent(handle) @ (side["home"][0] - handle)) > PULL_AHEAD_M
+    palm_from = item.get("palm_from")     # opt-in: the fingers along the axis all the way, the palm pushing from this angle on
+    along_axis = pull or palm_from is not None
     faces = link.faces(way, start, handle_only=pull)   # contact radius -> face point (world, at ``start``)
     # fingers along the axis: downwards, reaching over the handle (or, the axis level, away from the hand)
     above = link.axis @ UP if abs(link.axis @ UP) > UPRIGHT_AXIS_COS else link.axis @ (side["home"][0] - handle)
     down = -link.axis * np.sign(above)
-    tilt_choices = TILTS_DEG[:1] if pull else TILTS_DEG     # pulling fingers lie along the axis: no tilt to try
+    tilt_choices = TILTS_DEG[:1] if along_axis else TILTS_DEG     # fingers along the axis: no tilt to try
+    if palm_from is not None:
+        palm = palm_point(side["hand"], item["hand"], side["open"])     # teleop/plan_steps/palm_push.py
+        fingers = finger_tips(side["hand"], item["hand"], side["open"])
 
     def pose(angle: float, radius: float, tilt: float, gap: float = -PUSH_DEPTH_M) -> tuple[np.ndarray, np.ndarray]:
         face = link.rotated(faces[radius], angle - start)
         push = way * link.tangent(face)          # where the face moves as the link turns ``way``
+        if palm_turns(angle, palm_from, way):
+            R = palm_frame(push, down)
+            return face - gap * push - R @ palm, R
         inward = -link.radial(face)
         a = np.radians(tilt)
         z = np.cos(a) * push + np.sin(a) * inward              # fingers
-        if pull:
+        if along_axis:
             z, y = down, push                    # fingers down behind the handle, the pads facing the way they pull
         else:
             y = inward - (inward @ z) * z if tilt > 0 else -link.axis * way   # palm towards the hinge (or along it, square)
         y /= np.linalg.norm(y)
         R = np.column_stack([np.cross(y, z), y, z])
+        if palm_from is not None:       # the fingertip nearest the hinge under the edge, the others beyond it
+            return face - gap * push - R @ innermost(fingers, R, link.radial(face)), R
         return face - gap * push - R @ tip, R
 
     # along the arc, the outermost contact and the most tilted fingers the arm reaches, neither ever
@@ -99,7 +111,8 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     q = _solve(kin, pos + APPROACH_HEIGHT_M * link.radial(faces[choices[0]]), R, q)
     for angle in arc:
         found = None
-        for radius in [r for r in choices if not radii or r <= radii[-1]]:
+        for radius in [r for r in choices if (not radii or r <= radii[-1])
+                       and (not palm_turns(angle, palm_from, way) or r <= PALM_REACH * link.handle_radius)]:
             for tilt in [t for t in tilt_choices if not tilts or t <= tilts[-1]]:
                 pos, R = pose(angle, radius, tilt)
                 q_try = _solve(kin, pos, R, q)
@@ -113,19 +126,30 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         radii.append(found[0])
         tilts.append(found[1])
     first = pose(start, radii[0], tilts[0], FACE_GAP_M)
-    back = -first[1][:, 2] if pull else link.radial(faces[radii[0]])   # in along the fingers, or from beyond the free edge
+    back = -first[1][:, 2] if along_axis else link.radial(faces[radii[0]])   # in along the fingers, or from beyond the free edge
+    if palm_from is not None and not pull:      # ... a push along the axis: both, clear of what the link stands on
+        back = (back + link.radial(faces[radii[0]])) / np.linalg.norm(back + link.radial(faces[radii[0]]))
     op.set_off(side, data, item, DURATIONS["approach"], pos=first[0] + APPROACH_HEIGHT_M * back, quat=quat(first[1]),
                hand=side["open"])
     tl.add(DURATIONS["descend"], pos=first[0])
-    previous = (faces[radii[0]], first[0])
+    previous, previous_angle, previous_R = (faces[radii[0]], first[0]), start, first[1]
     for angle, radius, tilt in zip(arc, radii, tilts):
         pos, R = pose(angle, radius, tilt)
         face = link.rotated(faces[radius], angle - start)
         moved = max(np.linalg.norm(face - previous[0]), np.linalg.norm(pos - previous[1]))
-        tl.add(max(1, int(np.ceil(moved / ARC_SPEED_M_PER_STEP))), pos=pos, quat=quat(R))
+        steps = max(1, int(np.ceil(moved / ARC_SPEED_M_PER_STEP)))
+        if palm_turns(angle, palm_from, way) and not palm_turns(previous_angle, palm_from, way):
+            # from fingertips onto the palm: the hand first backs off the face until the palm (which stands
+            # higher off the hand than the fingertip pads) is clear of it, comes in just off the face, then presses
+            back_off = FACE_GAP_M + max(0.0, palm[1] - float(fingers[:, 1].min()))
+            tl.add(DURATIONS["open"], pos=previous[1] - back_off * previous_R[:, 1])
+            tl.add(DURATIONS["descend"], pos=pose(angle, radius, tilt, FACE_GAP_M)[0], quat=quat(R))
+        previous_angle, previous_R = angle, R
+        tl.add(steps, pos=pos, quat=quat(R))
         previous = (face, pos)
-    # draw back off the face the way the fingers came, then rise clear of the link and what it is on
-    pos = pos - APPROACH_HEIGHT_M * R[:, 2]
+    # draw back off the face the way the fingers came (a palm: straight off it), then rise clear of
+    # the link and what it is on
+    pos = pos - APPROACH_HEIGHT_M * (R[:, 1] if palm_turns(arc[-1], palm_from, way) else R[:, 2])
     tl.add(DURATIONS["retreat"], pos=pos)
     tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
     # back to where the hand rests: the arm leaves the pose it stretched into around the link

@@ -1,0 +1,96 @@
+"""`place_from: front` on a `pick`: set the held object into a container open at a side (a
+microwave, a fridge shelf, a cabinet) the way a person does, not lowered from above.
+
+The object is carried level to just outside the opening, its bottom clear of the cavity floor; slid
+in along the opening to its place; lowered onto the floor and let go; the open hand rises off it
+(within the cavity), is drawn back out the way it came and goes back to where it rests (it would
+stand in the way of a door shut next).
+The opening is found by rays from the cavity's centre against the container's own walls: its links
+(a door, open or shut) are not walls.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from sim.errors import SpecError
+from teleop.operator_motion import DURATIONS, UP, SideTimeline
+from teleop.plan_steps.operator import PlanningOperator
+from teleop.transit import bounding_box_points, hand_outline
+
+SLIDE_CLEARANCE_M = 0.02   # the object's bottom above the cavity floor while it slides in
+OUTSIDE_M = 0.03           # before sliding in, the hand's and the object's leading points this far outside the opening
+RELEASE_GAP_M = 0.005      # let go this far above the floor (as pick_place)
+WITHDRAW_RISE_M = 0.015    # the open hand rises at least this much off the object before it draws back
+OFF_TOP_M = 0.01           # ... and until its lowest point is this far above the object's top
+CEILING_GAP_M = 0.01       # ... its highest point staying this far under the cavity's ceiling
+RAY_FREE_M = 10.0          # a ray from the cavity's centre running this far without a wall leaves by the opening
+
+
+def opening(model: mujoco.MjModel, data: mujoco.MjData, body: int, centre: np.ndarray, towards: np.ndarray,
+            source="demo_plan") -> np.ndarray:
+    """The unit direction (world, horizontal) out of the container ``body``'s open side: of its frame's
+    four horizontal axes, each way, those whose ray from the cavity ``centre`` meets none of the
+    body's own geoms; of several, the one facing ``towards`` (where the hand rests)."""
+    R = data.xmat[body].reshape(3, 3)
+    geoms = range(model.body_geomadr[body], model.body_geomadr[body] + model.body_geomnum[body])
+    free = []
+    for axis in (0, 1):
+        for sign in (-1.0, 1.0):
+            d = sign * R[:, axis]
+            hits = [mujoco.mju_rayGeom(data.geom_xpos[g], data.geom_xmat[g], model.geom_size[g], centre, d,
+                                       int(model.geom_type[g])) for g in geoms]
+            if all(h < 0 or h > RAY_FREE_M for h in hits):
+                free.append(d)
+    if not free:
+        raise SpecError(source, "demo_plan.place_from", "a container open at a side (front)", model.body(body).name)
+    return max(free, key=lambda d: float(d @ (towards - centre)))
+
+
+def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
+                          offset: np.ndarray) -> None:
+    """The held object ``name`` (its centre ``offset`` from the wrist, world) carried from where the hand
+    is to in front of the step's `place`, slid in through its opening to `place_offset` [dx, dy] from its
+    centre (dz: above the cavity floor), lowered, let go; the hand drawn back out and home."""
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    model, task = op.scene.model, op.scene.task
+    target, obj = task.objects[item["place"]], task.objects[name]
+    body = op.scene.object_body_ids[item["place"]]
+    R = data.xmat[body].reshape(3, 3)
+    centre = data.xpos[body] + R @ np.asarray(target.interior_offset, float)
+    out = opening(model, data, body, centre, side["home"][0], task.source)
+    half = np.asarray(target.interior_half_extents, float)
+    floor = float(centre[2] - np.abs(R[2]) @ half)          # the cavity floor's height (world)
+    mouth = centre + float(np.abs(R.T @ out) @ half) * out   # a point of the opening's plane
+    dx, dy, dz = [*item.get("place_offset", [0.0, 0.0]), 0.0][:3]
+    place = np.array([*(op.object_pos(data, item["place"])[:2] + [dx, dy]),
+                      floor + dz + obj.rest_height + RELEASE_GAP_M]) - offset      # wrist, letting go
+    op.leaves(name, place + offset - RELEASE_GAP_M * UP, on=item["place"])
+    # how far ahead of the wrist (into the opening) the open or closed hand and the object reach
+    body_pts = bounding_box_points(model, data, op.scene.object_body_ids[name]) - op.object_pos(data, name) + offset
+    R_hand = np.zeros(9)
+    mujoco.mju_quat2Mat(R_hand, tl.frames[-1].quat)
+    hand_pts = hand_outline(side["hand"], item["hand"], tl.frames[-1].hand, side["open"]) @ R_hand.reshape(3, 3).T
+    lead = float(np.max(np.concatenate([body_pts, hand_pts]) @ -out))
+    # let go, the open hand rises until its lowest point clears the object's top (the fingers hooked
+    # round a bowl's rim drag it back out otherwise), as far as the cavity's ceiling lets it
+    open_pts = hand_outline(side["hand"], item["hand"], side["open"]) @ R_hand.reshape(3, 3).T
+    ceiling = float(centre[2] + np.abs(R[2]) @ half)
+    room = ceiling - CEILING_GAP_M - float(place[2] + max(open_pts[:, 2].max(), hand_pts[:, 2].max()))
+    rise = max(WITHDRAW_RISE_M, min(float(body_pts[:, 2].max() + OFF_TOP_M - open_pts[:, 2].min()), room))
+    back = max(0.0, float((place - mouth) @ -out) + lead + OUTSIDE_M)
+    slide = place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP
+    carry_frame = len(tl.frames)
+    op.set_off(side, data, item, DURATIONS["carry"], pos=slide + back * out, carried=(name, offset))
+    # outside the opening the operator looks where the object sits in the hand and corrects the rest
+    first = len(tl.frames)
+    tl.add(DURATIONS["carry"], pos=slide)
+    tl.add(DURATIONS["lower"], pos=place)
+    tl.add(DURATIONS["open"], hand=side["open"])
+    tl.add(DURATIONS["retreat"], pos=place + rise * UP)
+    tl.add(DURATIONS["retreat"], pos=place + rise * UP + back * out)
+    side["corrections"].append((tl.frames[first - 1].end_step, name, offset, slice(first, len(tl.frames))))
+    op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
+    tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
