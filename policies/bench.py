@@ -77,6 +77,8 @@ def _evaluate(checkpoint: str | None, episodes: int, max_steps: int | None, quer
     out["share"] = {k: v / total for k, v in parts.items()} | {"other": 1.0 - sum(parts.values()) / total}
     policy_steps = sum(steps) // (physics.CONTROL_HZ // policy.observation_spec.rate_hz)
     out["ms_per_policy_step"] = {k: 1e3 * v / max(1, policy_steps) for k, v in parts.items()}
+    # wall time above grows with the machine's load; the rendering thread's CPU time does not
+    out["render_cpu_ms_per_policy_step"] = 1e3 * sum(t["render_cpu"] for t in timings) / max(1, policy_steps)
     if checkpoint and queries:
         out["inference_ms_per_query"] = _inference_ms(policy, queries, np)
     out["peak_rss_mb"] = _peak_mb()

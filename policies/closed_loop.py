@@ -31,9 +31,11 @@ log = logging.getLogger(__name__)
 
 @dataclass
 class EpisodeTiming:
-    """Seconds spent per part of the loop (`b2d bench policy`)."""
+    """Seconds spent per part of the loop (`b2d bench policy`); `render_cpu` is the rendering thread's
+    CPU seconds (with LP_NUM_THREADS=0 Mesa rasterizes on it), which a loaded machine does not inflate."""
 
     render: float = 0.0
+    render_cpu: float = 0.0
     policy: float = 0.0
     physics: float = 0.0
     evaluate: float = 0.0
@@ -112,9 +114,10 @@ def run_episode(policy: Policy, scene: Scene, seed: int, episode_id: str = "0000
                 if getattr(policy, "done", None) and policy.done(tick):
                     break
                 if source is not None and len(queue) < spec.n_obs_steps:
-                    t0 = clock()
+                    t0, cpu0 = clock(), time.thread_time()
                     source.capture(data)
                     timing.render += clock() - t0
+                    timing.render_cpu += time.thread_time() - cpu0
                 if not queue:
                     obs = (source.observation(scene.task.instruction, tick) if source is not None
                            else {"sim": (scene, data), "tick": tick, "instruction": scene.task.instruction})

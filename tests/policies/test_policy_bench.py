@@ -12,6 +12,8 @@ def test_policy_bench_reports_training_inference_throughput_memory_and_shares():
     assert set(evaluation["share"]) == {"render", "policy", "physics", "evaluate", "other"}
     assert abs(sum(evaluation["share"].values()) - 1.0) < 1e-9
     assert evaluation["inference_ms_per_query"]["median"] > 0
+    # the views were rendered on the timed thread: CPU time, at most the wall time it took
+    assert 0 < evaluation["render_cpu_ms_per_policy_step"] <= evaluation["ms_per_policy_step"]["render"] * 1.05
     assert figures["training"]["peak_rss_mb"] > 100 and evaluation["peak_rss_mb"] > 100
     assert figures["baseline_scripted_operator"]["queries_per_episode"] == 9     # queried every control step
     assert figures["evaluation_vs_baseline"] > 0
