@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import signal
 import sys
 from pathlib import Path
 
@@ -32,12 +33,24 @@ def serve(checkpoint_dir, protocol, port, host, max_mb, layout_file) -> None:
     click.echo(f"serving {policy.name} ({policy.checkpoint.task} on {policy.checkpoint.embodiment}) at "
                f"{server_url(protocol, server.address)}", err=True)
     sys.stderr.flush()
+    _stop_on_signals()
     try:
         server.serve_forever()
     except KeyboardInterrupt:
         pass
     finally:
         server.close()
+
+
+def _stop_on_signals() -> None:
+    """SIGTERM (a process manager, Kubernetes, `kill`) and SIGINT stop the server cleanly. Set here because
+    a parent may have left them ignored, and an ignored disposition survives exec: started from a
+    process that ignores SIGTERM, the server would otherwise outlive every polite stop."""
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
 
 
 @click.command()

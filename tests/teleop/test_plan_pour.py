@@ -1,5 +1,7 @@
 """Plan step `pour`: its load-time check, its keyframes and a real episode tipping a bottle."""
 
+import dataclasses
+
 import mujoco
 import numpy as np
 import pytest
@@ -51,7 +53,7 @@ def test_check_accepts_a_pour():
 
 def _operator(step):
     scene = demonstration_scene(TASK, EMBODIMENT, 0)
-    scene.task.demo_plan[:] = _check(**step)
+    scene.task = dataclasses.replace(scene.task, demo_plan=_check(**step))    # a copy: the cached task keeps its plan
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)
@@ -172,7 +174,7 @@ def test_check_accepts_a_point():
 
 def _point_operator():
     scene = demonstration_scene(POINT_TASK, POINT_EMBODIMENT, 0)
-    scene.task.demo_plan[:] = _check_point()
+    scene.task = dataclasses.replace(scene.task, demo_plan=_check_point())
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)

@@ -2,6 +2,7 @@
 process, seed for seed; `b2d serve` and `b2d eval --remote` do the same from the command line."""
 
 import json
+import signal
 import subprocess
 import sys
 import threading
@@ -74,9 +75,16 @@ def test_the_episode_seed_reaches_a_sampling_policy_across_the_wire(dp_checkpoin
     assert served[8].tobytes() != local.tobytes()
 
 
+def _ignore_stop_signals() -> None:
+    """As some parents leave a child (an ignored disposition survives exec)."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def test_b2d_serve_then_b2d_eval_remote(checkpoint, tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "b2d_cli.main", "serve", "--checkpoint", str(checkpoint),
-                             "--protocol", "tcp", "--port", "0"], stderr=subprocess.PIPE, text=True)
+                             "--protocol", "tcp", "--port", "0"], stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_ignore_stop_signals)
     try:
         first = proc.stderr.readline()
         assert "serving act_tiny (citrus_plate_loading on ur5_rh5dg2) at tcp://127.0.0.1:" in first, first
@@ -91,7 +99,8 @@ def test_b2d_serve_then_b2d_eval_remote(checkpoint, tmp_path):
         assert row["policy"] == "act_tiny" and row["termination"] == "horizon" and row["anchor"]
     finally:
         proc.terminate()
-        proc.wait(timeout=10)
+        # a SIGTERM stops it cleanly although its parent ignored SIGTERM
+        assert proc.wait(timeout=30) == 0
 
 
 def test_eval_remote_bad_input_is_one_line(tmp_path):
