@@ -14,6 +14,7 @@ import resource
 import statistics
 import tempfile
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
@@ -109,9 +110,10 @@ def _inference_ms(policy, queries: int, np) -> dict:
 
 
 def _in_child(fn, *args):
-    ctx = multiprocessing.get_context("spawn")
-    with ctx.Pool(1) as pool:
-        return pool.apply(fn, args)
+    # a process pool that stops its worker with a sentinel: multiprocessing.Pool's exit sends SIGTERM,
+    # which a worker never gets when the caller's parent left SIGTERM ignored (it survives exec)
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return pool.submit(fn, *args).result()
 
 
 def run_policy_bench(policy: str = "act", config: str = "tiny", demos: int = 2, train_steps: int = 50,

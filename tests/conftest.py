@@ -1,4 +1,6 @@
 import os
+import signal
+import warnings
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -18,3 +20,14 @@ def raw_dir(tmp_path_factory):
 @pytest.fixture(scope="session")
 def raw_path(raw_dir):
     return sorted(raw_dir.glob("*.raw.h5"))[0]
+
+
+@pytest.fixture(autouse=True)
+def _stop_signals_stay_default(request):
+    """A library that leaves SIGTERM ignored in this worker process passes that on to every child a later
+    test starts (an ignored disposition survives exec), and such a child outlives terminate(). Put it
+    back after the test, and say which test it was."""
+    yield
+    if signal.getsignal(signal.SIGTERM) == signal.SIG_IGN:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        warnings.warn(f"{request.node.nodeid} left SIGTERM ignored; restored")
