@@ -16,6 +16,7 @@ from sim.demo_plan import DRAG_HOOK_DEPTH_M, DRAG_PITCH_DEG
 from sim.embodiment.mirror import M
 from sim.errors import SpecError
 from sim.scene.sample import zone_centre
+from teleop.geom_rays import body_geoms, nearest_hit
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
 from teleop.plan_steps.operator import PlanningOperator
@@ -64,13 +65,9 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
 def wall_distance(op: PlanningOperator, data: mujoco.MjData, body: int, point: np.ndarray, d: np.ndarray) -> float:
     """How far the container's own wall is from ``point`` (inside it) along ``d``: a ray against
     each of its geoms, so a round bowl and a box both come out exact."""
-    model, hits = op.scene.model, []
-    for g in range(model.body_geomadr[body], model.body_geomadr[body] + model.body_geomnum[body]):
-        dist = mujoco.mju_rayGeom(data.geom_xpos[g], data.geom_xmat[g], model.geom_size[g], point, d,
-                                  int(model.geom_type[g]))
-        if dist >= 0:
-            hits.append(dist)
-    if not hits:
+    model = op.scene.model
+    dist = nearest_hit(model, data, body_geoms(model, body), point, d)
+    if dist is None:
         raise SpecError(op.scene.task.source, "demo_plan.drag", "a container whose walls surround its centre",
                         f"no wall of {model.body(body).name} along {np.round(d, 3).tolist()}")
-    return min(hits)
+    return dist

@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 
 from sim.errors import SpecError
+from teleop.geom_rays import body_geoms, nearest_hit
 from teleop.operator_motion import DURATIONS, UP, SideTimeline
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.transit import bounding_box_points, hand_outline
@@ -34,14 +35,12 @@ def opening(model: mujoco.MjModel, data: mujoco.MjData, body: int, centre: np.nd
     four horizontal axes, each way, those whose ray from the cavity ``centre`` meets none of the
     body's own geoms; of several, the one facing ``towards`` (where the hand rests)."""
     R = data.xmat[body].reshape(3, 3)
-    geoms = range(model.body_geomadr[body], model.body_geomadr[body] + model.body_geomnum[body])
     free = []
     for axis in (0, 1):
         for sign in (-1.0, 1.0):
             d = sign * R[:, axis]
-            hits = [mujoco.mju_rayGeom(data.geom_xpos[g], data.geom_xmat[g], model.geom_size[g], centre, d,
-                                       int(model.geom_type[g])) for g in geoms]
-            if all(h < 0 or h > RAY_FREE_M for h in hits):
+            hit = nearest_hit(model, data, body_geoms(model, body), centre, d)
+            if hit is None or hit > RAY_FREE_M:
                 free.append(d)
     if not free:
         raise SpecError(source, "demo_plan.place_from", "a container open at a side (front)", model.body(body).name)

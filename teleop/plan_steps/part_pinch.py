@@ -9,6 +9,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from teleop.geom_rays import nearest_hit
 from teleop.transit import object_geoms
 
 RAY_START_M = 0.03     # rays start this far either side of the grasp point: past a rim's thickness, inside a bowl
@@ -21,8 +22,6 @@ def part_width(model: mujoco.MjModel, data: mujoco.MjData, body: int, point: np.
     ends = []
     for sign in (1.0, -1.0):
         origin = point + sign * RAY_START_M * axis
-        hits = [mujoco.mju_rayGeom(data.geom_xpos[g], data.geom_xmat[g], model.geom_size[g], origin, -sign * axis,
-                                   int(model.geom_type[g])) for g in object_geoms(model, body)]
-        hits = [h for h in hits if h >= 0]
-        ends.append(RAY_START_M - min(hits) if hits else 0.0)
+        hit = nearest_hit(model, data, object_geoms(model, body), origin, -sign * axis)
+        ends.append(RAY_START_M - hit if hit is not None else 0.0)
     return max(0.0, ends[0] + ends[1])

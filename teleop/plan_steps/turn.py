@@ -28,6 +28,7 @@ import numpy as np
 
 from sim.embodiment.mirror import mirror_vec
 from sim.errors import SpecError
+from teleop.geom_rays import nearest_hit
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, axis_rotation, quat
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
 from teleop.plan_steps.operator import PlanningOperator
@@ -236,14 +237,9 @@ class Hinge:
             along = self.handle - (self.radial_vec(self.handle)) * (1.0 - f)
             push = way * self.tangent(along)
             origin = along - RAY_BACKOFF_M * push
-            hits = []
-            for g in [self.handle_geom] if handle_only else self.geoms:
-                d = mujoco.mju_rayGeom(self.data.geom_xpos[g], self.data.geom_xmat[g], self.model.geom_size[g],
-                                       origin, push, int(self.model.geom_type[g]))
-                if d >= 0:
-                    hits.append(d)
-            if hits:
-                out[float(f * self.handle_radius)] = self.rotated(origin + min(hits) * push, turn)
+            d = nearest_hit(self.model, self.data, [self.handle_geom] if handle_only else self.geoms, origin, push)
+            if d is not None:
+                out[float(f * self.handle_radius)] = self.rotated(origin + d * push, turn)
         if not out:
             raise SpecError(self.source, "demo_plan.turn", "a link with a face to push",
                             self.model.body(self.body).name)
