@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import time
 
 import dagster as dg
@@ -92,6 +93,21 @@ def _clock(seconds: float) -> str:
     return f"{int(seconds) // 60}:{int(seconds) % 60:02d}"
 
 
+@contextlib.contextmanager
+def signal_handlers_kept(signals=(signal.SIGTERM, signal.SIGINT)):
+    """Put these signals' handlers back as they were after a Dagster run in this process. Dagster's
+    interrupt handling (dagster/_utils/interrupts.py) leaves SIGTERM mapped to whatever SIGINT's handler
+    was, and a background job of a non-interactive shell has SIGINT ignored: after one run the process,
+    and every child it starts later, would ignore SIGTERM for good."""
+    saved = {sig: signal.getsignal(sig) for sig in signals}
+    try:
+        yield
+    finally:
+        for sig, handler in saved.items():
+            if handler is not None:               # None: set from outside Python; leave it
+                signal.signal(sig, handler)
+
+
 def materialize_chain(settings: FactorySettings, setting_keys: list[str], instance: dg.DagsterInstance,
                       channels: list[str] | None = None, log=print, processes: int | None = None) -> list:
     """Run the plan on `instance` (a persistent one: step processes write to it). `processes`: steps run
@@ -123,8 +139,9 @@ def materialize_chain(settings: FactorySettings, setting_keys: list[str], instan
                     if isinstance(partition, dg.MultiPartitionKey) else {"dagster/partition": partition} if partition
                     else {})
             t0 = time.perf_counter()
-            result = dg.execute_job(reconstructable_job(job, settings), instance, run_config=run_configs[job],
-                                    tags=tags)
+            with signal_handlers_kept():
+                result = dg.execute_job(reconstructable_job(job, settings), instance, run_config=run_configs[job],
+                                        tags=tags)
             if job not in timed_here:                 # this machine, this size: forget the older runs
                 durations[job], timed_here = [], timed_here | {job}
             durations[job].append(time.perf_counter() - t0)
