@@ -22,6 +22,7 @@ from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_pres
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
+from teleop.plan_steps.flat_place import flat_place
 from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.part_pinch import part_width
@@ -286,41 +287,13 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
     op.leaves(name, rest_centre(place + offset), on=item["place"])
     carry_frame = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
+    lower_frame = len(tl.frames)
     lower_and_release(op, item, name, offset, place)
-    if grasp_kind(item) == "flat_pinch":
-        look_in_hand(op, data, side, name, offset, carry_frame)
+    if grasp_kind(item) == "flat_pinch":      # looks at it in the hand, squares it, eases the tips apart
+        ready = flat_pinch(op, data, item, name)[1]      # the pre-shape it came down with (same data: same plan)
+        flat_place(op, data, item, name, offset, carry_frame, lower_frame, ready)
     if item["place"] != TABLE_TARGET:
         op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
-
-
-LIFTED_M = 0.02     # an object this far above where it lay has been picked up
-
-
-def look_in_hand(op: PlanningOperator, data: mujoco.MjData, side: dict, name: str, offset: np.ndarray,
-                 carry_frame: int) -> None:
-    """As the hand sets off with the object (frame ``carry_frame``), the operator looks where it sits
-    in the hand and moves the carry, lowering and release with it. A flat pinch's tips sweep a thin
-    object along the table before they hold it, so it sits centimetres from where the plan put it:
-    further than the check above the target (``lower_and_release``) trusts, which then takes the
-    plan's offset as the new one."""
-    tl: SideTimeline = side["timeline"]
-    end = len(tl.frames)
-    correction = side["corrections"][-1]
-
-    start_z = float(op.object_pos(data, name)[2])
-
-    def adjust(now: mujoco.MjData) -> None:
-        if op.object_pos(now, name)[2] < start_z + LIFTED_M:
-            return      # not in the hand: nothing to carry
-        # its height too: the tips, pressed onto the table, held it higher in the hand than planned
-        moved = op.object_pos(now, name) - now.site_xpos[side["wrist_site_id"]] - offset
-        for frame in tl.frames[carry_frame:end]:
-            frame.pos = frame.pos - moved
-        for i, entry in enumerate(side["corrections"]):
-            if entry is correction:
-                side["corrections"][i] = (correction[0], name, offset + moved, correction[3])
-
-    op.on_frame_end(side, carry_frame - 1, adjust)
 
 
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
