@@ -161,7 +161,13 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
             from b2d_cli.render_workers_bench import parallel_render_figures
             parallel = parallel_render_figures(tmp / "e.replay.h5", profile, workers, tmp)
         comparison = _tessellation_comparison(tmp / "e.replay.h5", profile) if profile.tessellation else {}
+        layers = _still_layer_comparison(tmp / "e.replay.h5", profile)
     frames, total = info["frames"], t3 - t0
+    cpu_per_frame = max(cpu - info["setup_cpu_s"], 1e-9) / frames
+    whole_per_frame = cpu_per_frame + (layers["camera_cpu_ms_per_frame_whole_passes"]
+                                       - layers["camera_cpu_ms_per_frame"]) / 1e3
+    layers["frames_per_cpu_second_whole_passes"] = round(1 / whole_per_frame, 3)
+    layers["frames_per_cpu_second_speedup"] = round(whole_per_frame / cpu_per_frame, 3)
     seconds = dict(info["seconds"])
     setup = seconds.pop("setup", 0.0)       # once per render file: reported apart, not spread over frames
     per_frame = total - setup
@@ -191,6 +197,7 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
             "bytes_per_frame_by_modality": {k: round(v / max(frames, 1)) for k, v in stored.items()},
             **({"parallel_render": parallel} if parallel else {}),
             **({"tessellation_vs_mujoco_default": comparison} if comparison else {}),
+            "still_layers_vs_whole_passes": layers,
             "load_average_1min": round(os.getloadavg()[0], 2),
             "note": (f"scripted {task} on {embodiment}, one core (cpu_seconds_per_wall_second ~1: no other thread "
                      "worked; llvmpipe_threads 0 = software GL on the calling thread); shares and ms_per_frame are the run's time "
@@ -250,6 +257,57 @@ def _tessellation_comparison(replay_path: Path, profile) -> dict:
             "depth_pixels_changed_over_2mm": round(float(np.mean(depth_changed)), 4) if depth_changed else None,
             "note": "every camera of every frame rendered both ways in turn; CPU time of this thread (all of the "
                     "GL work when LP_NUM_THREADS=0, as b2d bench sets it)"}
+
+
+def _still_layer_comparison(replay_path: Path, profile) -> dict:
+    """The cameras of a profile with the still cameras' kept layers of the welded geoms (sim.offscreen, the
+    render stage's way) against every pass rendered whole (the code before them), frame by frame on the
+    same poses, alternating which goes first: this thread's CPU time per frame and whether every image
+    is byte-identical."""
+    import h5py
+    import mujoco
+
+    from episodes.replay_frames import RawView
+    from episodes.stages import frame_steps
+    from sim.render import CameraRig, set_positions
+    from sim.replay import scene_for
+
+    with h5py.File(replay_path, "r") as src:
+        scene = scene_for(RawView(src), replay_path)
+        qpos = src["qpos"][()]
+    model, data = scene.model, mujoco.MjData(scene.model)
+    segments = any(m in profile.modalities for m in ("segmentation", "box2d"))
+    rigs = {"layers": CameraRig(model, profile, segments=segments),
+            "whole": CameraRig(model, profile, segments=segments, still_layers=False)}
+    still = sorted(model.camera(i).name for i in rigs["layers"].renderer._still_cameras
+                   if model.camera(i).name in profile.camera_ids)
+    cpu = {k: 0.0 for k in rigs}
+    identical = True
+    steps = frame_steps(len(qpos), profile.rate_hz)
+    try:
+        for k, step in enumerate(steps):
+            set_positions(model, data, qpos[step])
+            shots = {}
+            for name in (("layers", "whole") if k % 2 == 0 else ("whole", "layers")):
+                t0 = time.thread_time()
+                shots[name] = rigs[name].capture(data)
+                cpu[name] += time.thread_time() - t0
+            for cam, shot in shots["whole"].items():
+                other = shots["layers"][cam]
+                for key, image in shot.items():
+                    a, b = (image.index, other[key].index) if key == "segments" else (image, other[key])
+                    identical &= a.tobytes() == b.tobytes()
+    finally:
+        for rig in rigs.values():
+            rig.close()
+    return {"still_cameras": still,
+            "camera_cpu_ms_per_frame": round(1e3 * cpu["layers"] / len(steps), 3),
+            "camera_cpu_ms_per_frame_whole_passes": round(1e3 * cpu["whole"] / len(steps), 3),
+            "camera_speedup": round(cpu["whole"] / max(cpu["layers"], 1e-9), 3),
+            "images_identical": bool(identical),
+            "note": "every camera of every frame rendered both ways in turn (CPU time of this thread); "
+                    "frames_per_cpu_second_whole_passes = this run's frames_per_cpu_second with the "
+                    "camera time of whole passes instead (the code before the layers), and _speedup the ratio"}
 
 
 # Render parts that are the sensors' own work (everything else is overhead the factory adds).

@@ -50,7 +50,8 @@ class CameraRig:
     holds "segments" (`sim.offscreen.SegmentIds`: geom per pixel): the segmentation that labels are
     made from."""
 
-    def __init__(self, model: mujoco.MjModel, profile: SensorProfile, segments: bool = False):
+    def __init__(self, model: mujoco.MjModel, profile: SensorProfile, segments: bool = False,
+                 still_layers: bool = True):
         self.model = model
         self.profile = profile
         self.camera_ids = {name: model.camera(name).id for name in profile.camera_ids}
@@ -58,7 +59,7 @@ class CameraRig:
         model.vis.map.zfar = profile.clip_far_m / max(model.stat.extent, 1e-6)
         apply_antialias(model, profile)
         apply_tessellation(model, profile)
-        self.renderer = OffscreenRenderer(model, profile.width, profile.height)
+        self.renderer = OffscreenRenderer(model, profile.width, profile.height, still_layers=still_layers)
         self.want_rgb = "rgb" in profile.modalities
         self.want_depth = "depth" in profile.modalities
         self.want_segments = segments

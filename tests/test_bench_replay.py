@@ -26,3 +26,9 @@ def test_replay_bench_parts_add_up_and_setup_is_reported_apart():
     assert versus["tessellation"] == [8, 4] and versus["mujoco_default"] == [28, 16]
     assert versus["camera_cpu_ms_per_frame"] > 0 and versus["camera_cpu_ms_per_frame_mujoco_default"] > 0
     assert 0 < versus["rgb_pixels_changed"] < 0.5 and 0 <= versus["depth_pixels_changed_over_2mm"] < 0.5
+    # issue 22: the still cameras' kept layers against whole passes (the code before them), same run
+    layers = out["still_layers_vs_whole_passes"]
+    assert layers["images_identical"] is True
+    assert layers["still_cameras"] == ["chest", "overhead", "stereo_left", "stereo_right"]
+    assert layers["camera_cpu_ms_per_frame"] > 0 and layers["camera_cpu_ms_per_frame_whole_passes"] > 0
+    assert layers["frames_per_cpu_second_whole_passes"] > 0 and layers["frames_per_cpu_second_speedup"] > 0
