@@ -64,13 +64,14 @@ def read_yaml(path: Path | str, error: Callable = SpecError) -> dict:
 
 
 def validate(model: type[M], raw: Any, path: Path | str | None = None, *, prefix: str = "",
-             error: Callable = SpecError) -> M:
+             error: Callable = SpecError, context: dict | None = None) -> M:
     """`raw` checked against `model`; every finding named in one `error` (first finding's field first).
 
     `prefix` is the dotted path of `raw` inside its file (a block validated on its own); `error` is built as
-    `error(path, field, expected, got)`: `SpecError` or a subclass of it."""
+    `error(path, field, expected, got)`: `SpecError` or a subclass of it; `context` reaches the model's
+    validators (what a block may refer to in the rest of its file)."""
     try:
-        return model.model_validate(raw)
+        return model.model_validate(raw, context=context)
     except pydantic.ValidationError as exc:
         raise schema_error(exc, path, model, prefix=prefix, error=error) from exc
 

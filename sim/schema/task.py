@@ -2,8 +2,10 @@
 
 Blocks with their own compilers stay mappings or lists here and are checked by them, with the same
 file-and-field errors: an object's `parts`/`mesh`/`shape`+`size` (sim/scene/parts.py), its `links`
-(sim/scene/articulated.py), `demo_plan` (sim/demo_plan.py) and `metrics` (the shared evaluator). What
-refers across objects (a zone, a support object, the paper embodiment) is checked by the loader."""
+(sim/scene/articulated.py), `demo_plan` (sim/demo_plan.py, which validates each step against its kind's
+schema in sim/schema/demo_plan.py, with the task's objects as context) and `metrics` (the shared
+evaluator). What refers across objects (a zone, a support object, the paper embodiment) is checked by the
+loader."""
 
 from __future__ import annotations
 

@@ -1,0 +1,384 @@
+"""Schema of a task's `demo_plan` steps: one model per step kind (sim/demo_plan.py picks the kind).
+
+Shapes, types and ranges are declared on the fields. What a step names in its task (an object, a
+container, a hinge and its range, a pourer, a task point) is checked by field validators against the
+`PlanScope` passed as validation context; a validator that needs another field reads it from the fields
+validated before it, so field order matters where noted. Errors name the field (`demo_plan[2].place`)
+and what was expected, through the schema layer's messages (sim/schema/messages.py).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, ClassVar, Literal
+
+from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
+
+from sim.scene.parts import parts_aabb
+
+from .base import Bool, CatalogModel, Int, Name, Number
+
+TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
+HANDS = ("left", "right")
+BOTH_HANDS = "both"         # `hand: both`: a step of both hands at once (carry)
+PLAN_GRASPS = ("power", "pinch")
+PICK_GRASPS = (*PLAN_GRASPS, "flat_pinch")   # flat_pinch: the fingertips to the table beside a thin object lying flat
+GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
+PLACE_FROM_FRONT = "front"
+PLACE_FROM = ("above", PLACE_FROM_FRONT)   # lowered from above, or slid in through a side opening
+WAIT_RANGE_S = (0.0, 60.0)
+APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
+DRAG_HOOK_DEPTH_M = 0.02    # drag: curled fingertips this far below the container's rim
+DRAG_PITCH_DEG = 20.0       # ... the fingers tilted this far down into it
+POUR_TILT_RANGE_DEG = (50.0, 150.0)   # mouth axis from vertical: a pour threshold .. near upside down
+POUR_DEFAULT_TILT_DEG = 85.0          # a person's pour: the bottle near horizontal, well past 50
+POUR_GRASPS = ("side", *PLAN_GRASPS)  # side: palm against a tall bottle, thumb up (a person's hold)
+POUR_DEFAULT_GRASP = "side"
+
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _vector(lengths: tuple[int, ...], words: str):
+    """A list of finite numbers of one of these lengths; anything else is refused in ``words`` as a whole."""
+    def check(value):
+        if not isinstance(value, list) or len(value) not in lengths or not all(map(_is_number, value)):
+            raise ValueError(words)
+        return value
+    return Annotated[list[Number], BeforeValidator(check)]
+
+
+PlaceOffset = _vector((2, 3), "[dx, dy] or [dx, dy, dz] in metres")
+TableSpot = _vector((2,), "[x, y] of the table top in metres")
+ZoneOffset = _vector((2,), "[dx, dy] from the zone's centre in metres")
+ObjectPoint = _vector((3,), "[x, y, z] in the object's frame, metres")
+
+
+def _scope(info: ValidationInfo):
+    return info.context["scope"]
+
+
+def _containers(scope) -> list[str]:
+    return sorted(n for n, o in scope.objects.items() if o.interior_half_extents is not None)
+
+
+def _one_of(value, names, expected: str) -> str:
+    """`value` if it is one of `names` (checked before the field's type: anything else gets `expected`)."""
+    if not isinstance(value, str) or value not in list(names):
+        raise ValueError(expected)
+    return value
+
+
+def _object(value: str, info: ValidationInfo, *, but: tuple = (), extra: tuple = ()) -> str:
+    """An object of the task's (not one of ``but``), or one of the ``extra`` words."""
+    names = sorted(n for n in _scope(info).objects if n not in but)
+    also = "".join(f" or {e!r}" for e in extra)
+    return _one_of(value, [*names, *extra], f"an object from {names}{also}")
+
+
+def _hinges(info: ValidationInfo) -> dict:
+    return {f"{n}/{link.name}": link.joint.range for n, o in _scope(info).objects.items() for link in o.links
+            if link.joint.type == "hinge"}
+
+
+class PlanStep(CatalogModel):
+    """Fields every kind has: `hand`, `after` (earlier steps, by index, that end before this one starts;
+    the two hands otherwise work at once) and `wait_s` (seconds it waits after them, or after the start)."""
+
+    keys_label: ClassVar[str] = "a field of this step kind"
+    hands: ClassVar[tuple[str, ...]] = HANDS
+
+    hand: Name
+    after: list[Int] = []
+    wait_s: Number = Field(0.0, ge=WAIT_RANGE_S[0], le=WAIT_RANGE_S[1], description="seconds in [0, 60]")
+
+    @field_validator("hand", mode="before")
+    @classmethod
+    def _a_hand(cls, hand: str) -> str:
+        return _one_of(hand, cls.hands, " or ".join(map(repr, cls.hands)))
+
+    @field_validator("after", mode="before")
+    @classmethod
+    def _earlier_steps(cls, after, info: ValidationInfo):
+        index = info.context["index"]
+        if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < index
+                                                  for j in after):
+            raise ValueError(f"a list of earlier step indices (0..{index - 1})")
+        return after
+
+
+class GraspFields(CatalogModel):
+    """How a step that picks something up holds it. `grasp` comes before the fields that depend on it."""
+
+    grasps: ClassVar[tuple[str, ...]] = PLAN_GRASPS
+    across: ClassVar[bool] = True          # grasp_yaw may be "across" (worked out for a hand closing from above)
+    part_pinch: ClassVar[bool] = False     # a pinch may take a grasp_point: the part it closes on (a rim)
+
+    grasp: Name = "power"
+    approach_pitch_deg: Number = Field(0.0, ge=APPROACH_PITCH_RANGE_DEG[0], le=APPROACH_PITCH_RANGE_DEG[1],
+                                       description="degrees in [0, 80]")
+    grasp_yaw: Number | Literal["across"] = 0.0     # checked whole by _yaw
+    grasp_point: ObjectPoint | None = None
+
+    @field_validator("grasp", mode="before")
+    @classmethod
+    def _a_grasp(cls, grasp: str) -> str:
+        return _one_of(grasp, cls.grasps, f"one of {list(cls.grasps)}")
+
+    @field_validator("approach_pitch_deg", mode="before")
+    @classmethod
+    def _not_with_flat_pinch(cls, pitch: float, info: ValidationInfo) -> float:
+        if info.data.get("grasp") == "flat_pinch":
+            raise ValueError("no approach_pitch_deg with grasp: flat_pinch (the hand turns its fingertips down to "
+                             "the table itself)")
+        return pitch
+
+    @field_validator("grasp_yaw", mode="before")
+    @classmethod
+    def _yaw(cls, yaw):
+        words = f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]" if cls.across else "degrees in [-180, 180]"
+        if yaw == GRASP_YAW_ACROSS and cls.across:
+            return yaw
+        if not _is_number(yaw) or not -180.0 <= yaw <= 180.0:
+            raise ValueError(words)
+        return yaw
+
+    @field_validator("grasp_point", mode="before")
+    @classmethod
+    def _not_with_a_pinch(cls, point, info: ValidationInfo):
+        grasp = info.data.get("grasp")
+        if grasp == "flat_pinch" or (grasp == "pinch" and not cls.part_pinch):
+            raise ValueError(f"no grasp_point with grasp: {grasp} (the pinch finds its own)")
+        return point
+
+
+class PickStep(PlanStep, GraspFields):
+    """{hand, pick, place, [place_offset], [place_from], [grasp], [approach_pitch_deg], [grasp_yaw],
+    [grasp_point], [after], [wait_s]}: carry an object onto or into `place` (an object, or `table` with
+    place_offset the spot on the table top). place_from: front slides it in level through the side a
+    container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
+    grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
+    object's frame; grasp: flat_pinch picks a thin object lying flat with the fingertips."""
+
+    grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
+    part_pinch: ClassVar[bool] = True
+
+    pick: Name
+    place_from: Name = "above"              # before `place`, which it constrains
+    place: Name
+    place_offset: PlaceOffset | None = None
+
+    @field_validator("pick", mode="before")
+    @classmethod
+    def _an_object(cls, name: str, info: ValidationInfo) -> str:
+        return _object(name, info)
+
+    @field_validator("place_from", mode="before")
+    @classmethod
+    def _a_way_in(cls, place_from: str) -> str:
+        return _one_of(place_from, PLACE_FROM, f"one of {list(PLACE_FROM)}")
+
+    @field_validator("place", mode="before")
+    @classmethod
+    def _a_place(cls, place: str, info: ValidationInfo) -> str:
+        if info.data.get("place_from") == PLACE_FROM_FRONT:
+            containers = _containers(_scope(info))
+            return _one_of(place, containers, f"with place_from: front, a container from {containers}")
+        return _object(place, info, extra=(TABLE_TARGET,))
+
+
+class DragStep(PlanStep):
+    """{hand, drag, to_zone, [place_offset], [hook_depth], [pitch_deg], [hook_closure], [after], [wait_s]}:
+    pull a container across the table until its centre is at place_offset [dx, dy] from the zone's
+    centre, the curled fingertips hook_depth below its rim, the fingers pitch_deg down and curled
+    hook_closure of the wall hook (a tall box tips when full curl lifts its wall: pull low, barely curled)."""
+
+    drag: Name
+    to_zone: Name
+    place_offset: ZoneOffset | None = None
+    hook_depth: Number = DRAG_HOOK_DEPTH_M
+    pitch_deg: Number = Field(DRAG_PITCH_DEG, ge=0.0, le=80.0, description="degrees in [0, 80]")
+    hook_closure: Number = Field(1.0, gt=0.0, le=1.0, description="a fraction of the wall hook's curl in (0, 1]")
+
+    @field_validator("drag", mode="before")
+    @classmethod
+    def _a_container(cls, name: str, info: ValidationInfo) -> str:
+        containers = _containers(_scope(info))
+        return _one_of(name, containers, f"a container from {containers}")
+
+    @field_validator("to_zone", mode="before")
+    @classmethod
+    def _a_zone(cls, zone: str, info: ValidationInfo) -> str:
+        zones = sorted(_scope(info).zones)
+        return _one_of(zone, zones, f"a zone from {zones}")
+
+    @field_validator("hook_depth", mode="before")
+    @classmethod
+    def _below_the_rim(cls, depth: float, info: ValidationInfo) -> float:
+        container = info.data.get("drag")
+        if container is None:            # refused above already
+            return depth
+        height = 2 * _scope(info).objects[container].interior_half_extents[2]
+        if not _is_number(depth) or not 0.0 < depth < height:
+            raise ValueError(f"metres below the rim in (0, {height:.3f})")
+        return depth
+
+
+class PressStep(PlanStep):
+    """{hand, press: [<object>/<link>, ...], [after], [wait_s]}: press these slide-jointed links (keys,
+    buttons) in order."""
+
+    press: Annotated[list[Name], Field(min_length=1)]
+
+    @field_validator("press", mode="before")
+    @classmethod
+    def _keys(cls, press, info: ValidationInfo):
+        keys = sorted(f"{n}/{link.name}" for n, o in _scope(info).objects.items() for link in o.links
+                      if link.joint.type == "slide")
+        if not isinstance(press, list) or not press or not all(isinstance(k, str) and k in keys for k in press):
+            raise ValueError(f"a non-empty list of slide-jointed links from {keys}")
+        return press
+
+
+class PourStep(PlanStep, GraspFields):
+    """{hand, pour, into, [tilt_deg], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
+    [place_offset], [after], [wait_s]}: tip a pourer (an object with a `mouth_axis`) over `into` (an
+    object, or a task point: poured just above it), then set it down where it was or at place_offset
+    [x, y] of the table top; grasp_yaw (degrees only: "across" is worked out for a hand closing from
+    above) and grasp_point as for `pick` (e.g. a side grasp held above the middle, so that the thumb
+    comes down beside a bottle's shoulder, not onto it)."""
+
+    grasps: ClassVar[tuple[str, ...]] = POUR_GRASPS
+    across: ClassVar[bool] = False
+
+    pour: Name
+    into: Name
+    grasp: Name = POUR_DEFAULT_GRASP
+    tilt_deg: Number = Field(POUR_DEFAULT_TILT_DEG, ge=POUR_TILT_RANGE_DEG[0], le=POUR_TILT_RANGE_DEG[1],
+                             description="degrees in [50, 150]")
+    place_offset: TableSpot | None = None
+
+    @field_validator("pour", mode="before")
+    @classmethod
+    def _a_pourer(cls, name: str, info: ValidationInfo) -> str:
+        pourers = sorted(n for n, o in _scope(info).objects.items() if o.mouth_axis is not None)
+        return _one_of(name, pourers, f"an object with a mouth_axis from {pourers}")
+
+    @field_validator("into", mode="before")
+    @classmethod
+    def _a_target(cls, into: str, info: ValidationInfo) -> str:
+        scope = _scope(info)
+        others = sorted(n for n in scope.objects if n != info.data.get("pour"))
+        return _one_of(into, [*others, *scope.points], f"an object from {others} or a point from {sorted(scope.points)}")
+
+
+class TurnStep(PlanStep):
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [after], [wait_s]}: swing a
+    hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
+    on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips."""
+
+    turn: Name
+    to: Number
+    palm_from: Number | None = None
+
+    @field_validator("turn", mode="before")
+    @classmethod
+    def _a_hinge(cls, link: str, info: ValidationInfo) -> str:
+        hinges = _hinges(info)
+        return _one_of(link, hinges, f"a hinge-jointed link from {sorted(hinges)}")
+
+    @field_validator("to", "palm_from", mode="before")
+    @classmethod
+    def _within_the_range(cls, angle, info: ValidationInfo):
+        link = info.data.get("turn")
+        if link is None:                 # refused above already
+            return angle
+        lo, hi = _hinges(info)[link]
+        if not _is_number(angle) or not lo <= angle <= hi:
+            raise ValueError(f"an angle in rad within the joint range [{lo:g}, {hi:g}]")
+        return angle
+
+
+class StrikeStep(PlanStep, GraspFields):
+    """{hand, strike, tool, strike_point, place, [place_offset], [grasp], [grasp_point], [grasp_yaw],
+    [approach_pitch_deg], [after], [wait_s]}: pick the tool up (grasp fields as for `pick`), strike the
+    target object once with the tool's strike_point (tool frame, on the tool), then put the tool onto or
+    into `place` (an object, or `table` with place_offset a spot of the table top)."""
+
+    strike: Name
+    tool: Name
+    strike_point: ObjectPoint
+    place: Name
+    place_offset: PlaceOffset | None = None
+
+    @field_validator("strike", mode="before")
+    @classmethod
+    def _a_target(cls, name: str, info: ValidationInfo) -> str:
+        return _object(name, info)
+
+    @field_validator("tool", mode="before")
+    @classmethod
+    def _a_tool(cls, name: str, info: ValidationInfo) -> str:
+        return _object(name, info, but=(info.data.get("strike"),))
+
+    @field_validator("strike_point")
+    @classmethod
+    def _on_the_tool(cls, point: list[float], info: ValidationInfo) -> list[float]:
+        tool = info.data.get("tool")
+        if tool is None:
+            return point
+        lo, hi = parts_aabb(_scope(info).objects[tool].parts)
+        if not all(a <= v <= b for v, a, b in zip(point, lo, hi)):
+            raise ValueError(f"a point on the tool, within its bounding box from {[round(float(a), 3) for a in lo]} "
+                             f"to {[round(float(b), 3) for b in hi]}")
+        return point
+
+    @field_validator("place", mode="before")
+    @classmethod
+    def _a_place(cls, place: str, info: ValidationInfo) -> str:
+        return _object(place, info, but=(info.data.get("tool"),), extra=(TABLE_TARGET,))
+
+
+class CarryStep(PlanStep):
+    """{hand: both, carry, place, [place_offset], [grasp_height], [return_home], [after], [wait_s]}: both
+    palms squeeze the object from opposite sides and carry it onto/into `place` (place_offset as for
+    pick); grasp_height (metres from its centre, within its half height) is where the palms press;
+    return_home: true sends both hands back to their home pose after letting go."""
+
+    hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
+
+    carry: Name
+    place: Name
+    place_offset: PlaceOffset | None = None
+    grasp_height: Number = 0.0
+    return_home: Bool = False
+
+    @field_validator("carry", mode="before")
+    @classmethod
+    def _an_object(cls, name: str, info: ValidationInfo) -> str:
+        return _object(name, info)
+
+    @field_validator("place", mode="before")
+    @classmethod
+    def _a_place(cls, place: str, info: ValidationInfo) -> str:
+        return _object(place, info, but=(info.data.get("carry"),))
+
+    @field_validator("grasp_height", mode="before")
+    @classmethod
+    def _within_its_height(cls, height: float, info: ValidationInfo) -> float:
+        carried = info.data.get("carry")
+        if carried is None:
+            return height
+        half_z = float(_scope(info).objects[carried].half_extents[2])
+        if not _is_number(height) or abs(height) > half_z:
+            raise ValueError(f"metres from the object's centre in [{-half_z:g}, {half_z:g}]")
+        return height
+
+
+# a step's kind is the one of these fields it has
+STEP_MODELS: dict[str, type[PlanStep]] = {
+    "pick": PickStep, "drag": DragStep, "pour": PourStep, "press": PressStep, "turn": TurnStep,
+    "carry": CarryStep, "strike": StrikeStep,
+}
