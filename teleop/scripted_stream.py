@@ -150,8 +150,8 @@ class ScriptedStreamOperator:
     def _reachable(self, side: str, pos: np.ndarray, quat: np.ndarray) -> Transform:
         """The plan's wrist-site pose, or the pose closest to it that the arm reaches."""
         kin = self.commander.sides[side].kin
-        result = kin.ik(pos, quat, self._arm_q[side], max_iters=REACH_IK_ITERS)
-        result = kin.ik_again_from(result, pos, quat, self.commander.sides[side].home_arm, max_iters=REACH_IK_ITERS)
+        result = kin.ik_tracking(pos, quat, self._arm_q[side], self.commander.sides[side].home_arm,
+                                 max_iters=REACH_IK_ITERS)
         self._arm_q[side] = result.q
         if result.success:
             return Transform(np.asarray(pos, float), quat_to_mat(quat))

@@ -9,7 +9,7 @@ frame) in WORLD coordinates.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -70,6 +70,7 @@ class IKResult:
     pos_err_m: float
     rot_err_rad: float
     iterations: int
+    from_home: bool = False     # solved again from home after the warm start missed (ArmKinematics.ik_again_from)
 
     @property
     def miss(self) -> float:
@@ -183,4 +184,12 @@ class ArmKinematics:
         if result.success:
             return result
         again = self.ik(target_pos, target_quat_wxyz, q_seed, max_iters=max_iters)
-        return again if again.success or again.miss < AGAIN_CLOSER * result.miss else result
+        if again.success or again.miss < AGAIN_CLOSER * result.miss:
+            return replace(again, from_home=True)
+        return result
+
+    def ik_tracking(self, target_pos, target_quat_wxyz, q_warm, q_home, max_iters: int = 200) -> IKResult:
+        """A pose along a path: solved warm from ``q_warm`` (the last solve: it keeps the arm on its
+        branch), and again from ``q_home`` where that misses (``ik_again_from``)."""
+        warm = self.ik(target_pos, target_quat_wxyz, q_warm, max_iters=max_iters)
+        return self.ik_again_from(warm, target_pos, target_quat_wxyz, q_home, max_iters=max_iters)

@@ -34,6 +34,15 @@ def test_a_missed_warm_start_is_solved_again_from_home():
     assert not warm.success and warm.pos_err_m > 0.05
     again = kin.ik_again_from(warm, pos, quat, home, max_iters=30)
     assert again.success and again.miss <= 1.0 < warm.miss
+    assert again.from_home and not warm.from_home
+
+
+def test_ik_tracking_is_the_warm_solve_then_the_solve_from_home():
+    kin, home, pos, quat = arm()
+    tracked = kin.ik_tracking(pos, quat, lost_branch(kin), home, max_iters=30)
+    by_hand = kin.ik_again_from(kin.ik(pos, quat, lost_branch(kin), max_iters=30), pos, quat, home, max_iters=30)
+    assert tracked.from_home and np.array_equal(tracked.q, by_hand.q)
+    assert not kin.ik_tracking(pos, quat, home, home, max_iters=30).from_home     # the warm start reached it
 
 
 def test_a_warm_start_that_succeeds_is_kept_as_it_is():
