@@ -5,6 +5,8 @@ container, a hinge and its range, a pourer, a task point) is checked by field va
 `PlanScope` passed as validation context; a validator that needs another field reads it from the fields
 validated before it, so field order matters where noted. Errors name the field (`demo_plan[2].place`)
 and what was expected, through the schema layer's messages (sim/schema/messages.py).
+An optional field absent from the step takes its planner's default: `= None` here means "absent" (a
+default is not validated), so an explicit null in the file is refused by the field's type.
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ def _vector(lengths: tuple[int, ...], words: str):
 
 PlaceOffset = _vector((2, 3), "[dx, dy] or [dx, dy, dz] in metres")
 TableSpot = _vector((2,), "[x, y] of the table top in metres")
+TableDirection = _vector((2,), "[dx, dy], a direction on the table top")
 ZoneOffset = _vector((2,), "[dx, dy] from the zone's centre in metres")
 ObjectPoint = _vector((3,), "[x, y, z] in the object's frame, metres")
 
@@ -105,7 +108,8 @@ class PlanStep(CatalogModel):
         index = info.context["index"]
         if not isinstance(after, list) or not all(isinstance(j, int) and not isinstance(j, bool) and 0 <= j < index
                                                   for j in after):
-            raise ValueError(f"a list of earlier step indices (0..{index - 1})")
+            raise ValueError(f"a list of earlier step indices (0..{index - 1})" if index else
+                             "an empty list (the first step has no earlier steps)")
         return after
 
 
@@ -120,7 +124,7 @@ class GraspFields(CatalogModel):
     approach_pitch_deg: Number = Field(0.0, ge=APPROACH_PITCH_RANGE_DEG[0], le=APPROACH_PITCH_RANGE_DEG[1],
                                        description="degrees in [0, 80]")
     grasp_yaw: Number | Literal["across"] = 0.0     # checked whole by _yaw
-    grasp_point: ObjectPoint | None = None
+    grasp_point: ObjectPoint = None
 
     @field_validator("grasp", mode="before")
     @classmethod
@@ -168,7 +172,7 @@ class PickStep(PlanStep, GraspFields):
     pick: Name
     place_from: Name = "above"              # before `place`, which it constrains
     place: Name
-    place_offset: PlaceOffset | None = None
+    place_offset: PlaceOffset = None
 
     @field_validator("pick", mode="before")
     @classmethod
@@ -197,7 +201,7 @@ class DragStep(PlanStep):
 
     drag: Name
     to_zone: Name
-    place_offset: ZoneOffset | None = None
+    place_offset: ZoneOffset = None
     hook_depth: Number = DRAG_HOOK_DEPTH_M
     pitch_deg: Number = Field(DRAG_PITCH_DEG, ge=0.0, le=80.0, description="degrees in [0, 80]")
     hook_closure: Number = Field(1.0, gt=0.0, le=1.0, description="a fraction of the wall hook's curl in (0, 1]")
@@ -243,12 +247,13 @@ class PressStep(PlanStep):
 
 
 class PourStep(PlanStep, GraspFields):
-    """{hand, pour, into, [tilt_deg], [grasp], [approach_pitch_deg], [grasp_yaw], [grasp_point],
-    [place_offset], [after], [wait_s]}: tip a pourer (an object with a `mouth_axis`) over `into` (an
-    object, or a task point: poured just above it), then set it down where it was or at place_offset
-    [x, y] of the table top; grasp_yaw (degrees only: "across" is worked out for a hand closing from
-    above) and grasp_point as for `pick` (e.g. a side grasp held above the middle, so that the thumb
-    comes down beside a bottle's shoulder, not onto it)."""
+    """{hand, pour, into, [tilt_deg], [tilt_toward], [grasp], [approach_pitch_deg], [grasp_yaw],
+    [grasp_point], [place_offset], [after], [wait_s]}: tip a pourer (an object with a `mouth_axis`) over
+    `into` (an object, or a task point: poured just above it), then set it down where it was or at
+    place_offset [x, y] of the table top; tilt_toward [dx, dy] (table top) is the way the mouth tips,
+    e.g. away from something the bottle's body would hit; grasp_yaw (degrees only: "across" is worked
+    out for a hand closing from above) and grasp_point as for `pick` (e.g. a side grasp held above the
+    middle, so that the thumb comes down beside a bottle's shoulder, not onto it)."""
 
     grasps: ClassVar[tuple[str, ...]] = POUR_GRASPS
     across: ClassVar[bool] = False
@@ -258,7 +263,15 @@ class PourStep(PlanStep, GraspFields):
     grasp: Name = POUR_DEFAULT_GRASP
     tilt_deg: Number = Field(POUR_DEFAULT_TILT_DEG, ge=POUR_TILT_RANGE_DEG[0], le=POUR_TILT_RANGE_DEG[1],
                              description="degrees in [50, 150]")
-    place_offset: TableSpot | None = None
+    place_offset: TableSpot = None
+    tilt_toward: TableDirection = None
+
+    @field_validator("tilt_toward")
+    @classmethod
+    def _a_direction(cls, direction: list[float] | None) -> list[float] | None:
+        if direction is not None and math.hypot(*direction) < 1e-9:
+            raise ValueError("a non-zero [dx, dy]")
+        return direction
 
     @field_validator("pour", mode="before")
     @classmethod
@@ -281,7 +294,7 @@ class TurnStep(PlanStep):
 
     turn: Name
     to: Number
-    palm_from: Number | None = None
+    palm_from: Number = None
 
     @field_validator("turn", mode="before")
     @classmethod
@@ -311,7 +324,7 @@ class StrikeStep(PlanStep, GraspFields):
     tool: Name
     strike_point: ObjectPoint
     place: Name
-    place_offset: PlaceOffset | None = None
+    place_offset: PlaceOffset = None
 
     @field_validator("strike", mode="before")
     @classmethod
@@ -351,7 +364,7 @@ class CarryStep(PlanStep):
 
     carry: Name
     place: Name
-    place_offset: PlaceOffset | None = None
+    place_offset: PlaceOffset = None
     grasp_height: Number = 0.0
     return_home: Bool = False
 

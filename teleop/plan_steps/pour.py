@@ -68,11 +68,11 @@ def point_world(op: PlanningOperator, name: str) -> np.ndarray:
 
 
 def tilt_turn(side: dict, hand_rot: np.ndarray, obj_rot: np.ndarray, axis_local: np.ndarray,
-              tilt_deg: float, wrist_at, q_seed: np.ndarray) -> np.ndarray:
+              tilt_deg: float, wrist_at, q_seed: np.ndarray, toward=None) -> np.ndarray:
     """The world rotation of the hand that tips the pourer's mouth axis ``tilt_deg`` from vertical:
     a turn about the fingers' (level) heading, whichever way the arm's IK reaches (``wrist_at(R)`` gives the
     wrist position for turn R), preferring the palm under the pourer, then the smaller joint motion from
-    ``q_seed``."""
+    ``q_seed``. ``toward`` ([dx, dy], optional): only a turn that tips the mouth that way."""
     # the fingers' heading, levelled: a hand pitched down turns about it (forearm plus wrist) so
     # that the mouth can tip past horizontal; palm down it is the fingers' direction itself
     fingers = hand_rot @ FINGERS_PALM_DOWN
@@ -86,6 +86,8 @@ def tilt_turn(side: dict, hand_rot: np.ndarray, obj_rot: np.ndarray, axis_local:
                 break
         else:
             continue
+        if toward is not None and float(up[:2] @ np.asarray(toward, float)) <= 0.0:
+            continue
         result = side["kin"].ik(wrist_at(T), quat(T @ hand_rot), q_seed)
         # reached first; then the pourer lying in the palm rather than hanging from the fingers
         # (a hand's grip is weakest pulled open), then the smaller joint motion
@@ -94,7 +96,8 @@ def tilt_turn(side: dict, hand_rot: np.ndarray, obj_rot: np.ndarray, axis_local:
         if best is None or key < best[0]:
             best = (key, T)
     if best is None:        # only a pourer lying far off upright in the hand could miss it
-        raise ValueError(f"pour: no turn about the fingers tips the mouth axis {tilt_deg:g} degrees")
+        raise ValueError(f"pour: no turn about the fingers tips the mouth axis {tilt_deg:g} degrees"
+                         + (f" towards {list(toward)}" if toward is not None else ""))
     return best[1]
 
 
@@ -130,7 +133,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     bottom = float(np.abs(obj_rot[2]) @ obj.half_extents)
     q_lift = side["kin"].ik(tl.frames[-1].pos, tl.frames[-1].quat, side["q"]).q
     T = tilt_turn(side, hand_rot, obj_rot, axis_local, float(item.get("tilt_deg", POUR_DEFAULT_TILT_DEG)),
-                  wrist_at, q_lift)
+                  wrist_at, q_lift, item.get("tilt_toward"))
     tipped = wrist_at(T)
     over = tipped.copy()
     over[2] = max(tipped[2], top + BOTTOM_ABOVE_RIM_M + bottom - offset[2])

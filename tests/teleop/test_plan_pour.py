@@ -149,9 +149,9 @@ def test_episode_tips_the_bottle_over_the_target():
     assert poured >= POUR_DURATIONS["pour"] // 2     # held over the target, well past the dwell
 
 
-# pouring over a task point (the evaluator's target may be a point): a toilet's bowl centre
-POINT_TASK, POINT_EMBODIMENT, POINT = "toilet_lid_cleaner_pour", "xarm7_leap", "bowl_centre"
-POINT_STEP = {"hand": "left", "pour": "cleaner", "into": POINT, "grasp": "pinch"}
+# pouring over a task point (the evaluator's target may be a point): the toilet task's pour point in its bowl
+POINT_TASK, POINT_EMBODIMENT, POINT = "toilet_lid_cleaner_pour", "xarm7_leap", "bowl_left"
+POINT_STEP = {"hand": "left", "pour": "cleaner", "into": POINT, "grasp": "side", "tilt_toward": [1.0, 0.0]}
 
 
 def _check_point(**fields):
@@ -162,7 +162,7 @@ def _check_point(**fields):
 
 def test_check_refuses_an_unknown_point_naming_objects_and_points():
     with pytest.raises(SpecError, match=r"demo_plan\[0\]\.into.*an object from \['toilet'\] or a point from "
-                                        r"\['bowl_centre'\]"):
+                                        r"\['bowl_centre', 'bowl_left'\]"):
         _check_point(into="cistern")
     with pytest.raises(SpecError, match=r"demo_plan\[0\]\.into"):
         _check_point(into=["bowl_centre"])
@@ -200,7 +200,7 @@ def test_keyframes_tip_the_mouth_just_above_a_point():
     grasp = frames[2]                          # descended, about to close: the bottle as it will be held
     in_hand = _mat(grasp.quat).T @ data.xmat[body].reshape(3, 3)
     offset = _mat(grasp.quat).T @ (data.xpos[body] - grasp.pos)
-    poses = [(f, _mat(f.quat)) for f in frames]
+    poses = [(f, _mat(f.quat)) for f in frames[3:-1]]     # held (not the home poses: a side grasp's bottle would lie flat)
     tilted, R = max(poses, key=lambda p: -(p[1] @ in_hand @ np.asarray(obj.mouth_axis, float))[2])
     tilt, dist = _tilt_and_reach(scene, tilted.pos + R @ offset, R @ in_hand, point[:2], "cleaner")
     mouth = tilted.pos + R @ offset + R @ in_hand @ mouth_local(obj)
