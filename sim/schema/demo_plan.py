@@ -36,6 +36,7 @@ POUR_TILT_RANGE_DEG = (50.0, 150.0)   # mouth axis from vertical: a pour thresho
 POUR_DEFAULT_TILT_DEG = 85.0          # a person's pour: the bottle near horizontal, well past 50
 POUR_GRASPS = ("side", *PLAN_GRASPS)  # side: palm against a tall bottle, thumb up (a person's hold)
 POUR_DEFAULT_GRASP = "side"
+TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
 
 
 
@@ -288,13 +289,16 @@ class PourStep(PlanStep, GraspFields):
 
 
 class TurnStep(PlanStep):
-    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [after], [wait_s]}: swing a
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [after], [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
-    on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips."""
+    on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
+    speed (m/s) is how fast the hand's contact moves along the arc (default 0.09)."""
 
     turn: Name
     to: Number
     palm_from: Number = None
+    speed: Number = Field(None, gt=TURN_SPEED_RANGE_M_S[0], le=TURN_SPEED_RANGE_M_S[1],
+                          description="m/s of the contact along the arc in (0, 0.3]")
 
     @field_validator("turn", mode="before")
     @classmethod

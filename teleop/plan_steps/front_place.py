@@ -20,13 +20,17 @@ from teleop.operator_motion import DURATIONS, UP, SideTimeline
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.transit import bounding_box_points, hand_outline
 
-SLIDE_CLEARANCE_M = 0.02   # the object's bottom above the cavity floor while it slides in
+# the object's bottom above the cavity floor while it slides in: a bowl held by its rim hangs tilted
+SLIDE_CLEARANCE_M = 0.04
 OUTSIDE_M = 0.03           # before sliding in, the hand's and the object's leading points this far outside the opening
 RELEASE_GAP_M = 0.005      # let go this far above the floor (as pick_place)
 WITHDRAW_RISE_M = 0.015    # the open hand rises at least this much off the object before it draws back
 OFF_TOP_M = 0.01           # ... and until its lowest point is this far above the object's top
 CEILING_GAP_M = 0.01       # ... its highest point staying this far under the cavity's ceiling
 RAY_FREE_M = 10.0          # a ray from the cavity's centre running this far without a wall leaves by the opening
+# carried to the opening and slid in slowly: a bowl held by its rim swings about the pads when a faster
+# move starts and stops (microwave_bowl_loading, 60 steps each: it slid off the pads or tipped at the opening)
+CARRY_STEPS, SLIDE_STEPS = 180, 120
 
 
 def opening(model: mujoco.MjModel, data: mujoco.MjData, body: int, centre: np.ndarray, towards: np.ndarray,
@@ -82,10 +86,10 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     back = max(0.0, float((place - mouth) @ -out) + lead + OUTSIDE_M)
     slide = place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP
     carry_frame = len(tl.frames)
-    op.set_off(side, data, item, DURATIONS["carry"], pos=slide + back * out, carried=(name, offset))
+    op.set_off(side, data, item, CARRY_STEPS, pos=slide + back * out, carried=(name, offset))
     # outside the opening the operator looks where the object sits in the hand and corrects the rest
     first = len(tl.frames)
-    tl.add(DURATIONS["carry"], pos=slide)
+    tl.add(SLIDE_STEPS, pos=slide)
     tl.add(DURATIONS["lower"], pos=place)
     tl.add(DURATIONS["open"], hand=side["open"])
     tl.add(DURATIONS["retreat"], pos=place + rise * UP)

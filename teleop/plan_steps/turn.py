@@ -28,6 +28,7 @@ import numpy as np
 
 from sim.embodiment.mirror import mirror_vec
 from sim.errors import SpecError
+from sim.physics import CONTROL_HZ
 from teleop.geom_rays import nearest_hit
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, axis_rotation, quat
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
@@ -41,7 +42,7 @@ PUSHING_TIPS = ("index_tip", "middle_tip")   # the pads that push (retarget keyp
 PUSH_DEPTH_M = 0.004          # fingertip pads aimed this far into the face: they press on it
 FACE_GAP_M = 0.025            # ... and set down this far off it before pushing
 ARC_STEP_RAD = 0.1            # keyframes this far apart along the arc
-ARC_SPEED_M_PER_STEP = 0.0015  # the contact's speed along the arc: 0.09 m/s
+ARC_SPEED_M_PER_STEP = 0.0015  # the contact's speed along the arc: 0.09 m/s (a step's `speed` overrides it)
 # contact radii tried, as fractions of the handle centre's (outermost first): the tips start under the
 # handle's outer half, clear of what it stands out from
 RADIUS_FRACTIONS = np.linspace(1.03, 0.35, 18)
@@ -60,6 +61,8 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     link = Hinge(op.scene.model, data, item["turn"], op.scene.task.source)
     start = op.link_angles.get(item["turn"], link.angle)
     target = float(item["to"])
+    # opt-in `speed` (m/s of the contact along the arc): a door swung as briskly as a person swings it
+    arc_step_m = item["speed"] / CONTROL_HZ if "speed" in item else ARC_SPEED_M_PER_STEP
     if abs(target - start) < 1e-6:
         return
     way = np.sign(target - start)               # +1: the way the joint angle grows
@@ -138,7 +141,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         pos, R = pose(angle, radius, tilt)
         face = link.rotated(faces[radius], angle - start)
         moved = max(np.linalg.norm(face - previous[0]), np.linalg.norm(pos - previous[1]))
-        steps = max(1, int(np.ceil(moved / ARC_SPEED_M_PER_STEP)))
+        steps = max(1, int(np.ceil(moved / arc_step_m)))
         if palm_turns(angle, palm_from, way) and not palm_turns(previous_angle, palm_from, way):
             # from fingertips onto the palm: the hand first backs off the face until the palm (which stands
             # higher off the hand than the fingertip pads) is clear of it, comes in just off the face, then presses
