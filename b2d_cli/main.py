@@ -232,14 +232,16 @@ def validate(episode) -> None:
                    "on these embodiments ('all' or NAME[,NAME]) for --episodes seeds: a task x embodiment table.")
 @click.option("--max-steps", "demo_max_steps", default=None, type=click.IntRange(min=1),
               help="demos with --embodiment: cap on control steps per episode.")
+@click.option("--all-seeds", is_flag=True,
+              help="demos with --embodiment: run every seed of a cell, not only until its majority is decided.")
 @click.option("--policy", "policy_name", type=click.Choice(["act", "dp"]), default="act", show_default=True,
               help="policy: which learned policy.")
 @click.option("--config", "config_name", default="tiny", show_default=True, help="policy: its config.")
 @click.option("--train-steps", default=50, show_default=True, type=click.IntRange(min=1), help="policy: training steps.")
 @click.option("--eval-episodes", default=2, show_default=True, type=click.IntRange(min=1),
               help="policy: closed-loop episodes timed (each policy and the baseline).")
-def bench(part, profile, steps, workers, episodes, setting, operator, embodiment, demo_max_steps, policy_name,
-          config_name, train_steps, eval_episodes) -> None:
+def bench(part, profile, steps, workers, episodes, setting, operator, embodiment, demo_max_steps, all_seeds,
+          policy_name, config_name, train_steps, eval_episodes) -> None:
     """Print benchmark figures as JSON on stdout."""
     # Per-core figures: Mesa's software GL (llvmpipe) rasterizes on one thread per core by default, so a
     # "one core" render also used the other cores (b2d bench replay --profile paper: 5.6 fps "per core"
@@ -255,7 +257,8 @@ def bench(part, profile, steps, workers, episodes, setting, operator, embodiment
         figures = run_policy_bench(policy_name, config_name, train_steps=train_steps, eval_episodes=eval_episodes)
     elif part == "demos" and embodiment is not None:
         from teleop.demo_bench import run_cross_embodiment_demo_bench
-        figures = run_cross_embodiment_demo_bench(embodiment, list(setting), episodes, demo_max_steps, operator)
+        figures = run_cross_embodiment_demo_bench(embodiment, list(setting), episodes, demo_max_steps, operator,
+                                                  stop_when_decided=not all_seeds)
     elif part == "demos":
         from teleop.demo_bench import run_demo_bench
         figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator)

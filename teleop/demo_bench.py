@@ -52,16 +52,23 @@ def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: s
 
 
 def run_cross_embodiment_demo_bench(embodiments: str, settings: list[str], seeds: int = 3,
-                                    max_steps: int | None = None, operator: str = DEFAULT_OPERATOR) -> dict:
+                                    max_steps: int | None = None, operator: str = DEFAULT_OPERATOR,
+                                    stop_when_decided: bool = True) -> dict:
     """``b2d bench demos --embodiment ...``: ``settings`` are setting keys or task names (none: every task
-    with a plan), ``embodiments`` 'all' or comma-separated names; both fail fast on an unknown name."""
+    with a plan), ``embodiments`` 'all' or comma-separated names; both fail fast on an unknown name.
+    A cell stops running seeds once its majority is decided (``stop_when_decided``; the CLI's
+    ``--all-seeds`` turns that off): on 2 cores a full table is hours, and a settled cell's last seed
+    changes nothing in it."""
     chosen = parse_embodiments(embodiments)
     tasks = parse_tasks(settings)
 
     def progress(cell: dict) -> None:
         errors = f" ({len(cell['errors'])} errors)" if cell["errors"] else ""
-        print(f"{cell['task']} on {cell['embodiment']}: {cell['successes']}/{cell['seeds']}{errors}",
+        early = f", decided after {cell['seeds']} of {cell['seeds_planned']} seeds" if cell["decided_early"] else ""
+        cause = f", cause: {cell['failure_cause']}" if cell.get("failure_cause") else ""
+        print(f"{cell['task']} on {cell['embodiment']}: {cell['successes']}/{cell['seeds']}{early}{cause}{errors}",
               file=sys.stderr, flush=True)     # stdout carries the JSON
 
-    result = run_cross_embodiment_bench(tasks, chosen, seeds, max_steps, operator, progress=progress)
+    result = run_cross_embodiment_bench(tasks, chosen, seeds, max_steps, operator,
+                                        stop_when_decided=stop_when_decided, progress=progress)
     return {**result, "markdown": markdown_table(result)}     # the README's table, paper cells in bold
