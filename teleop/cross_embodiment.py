@@ -100,9 +100,8 @@ def plan_reach(task: str, embodiment: str, index: int = 0) -> dict:
         steps = range(0, min(frames[-2].end_step if len(frames) > 1 else 0, horizon))
         for step in steps:
             pos, quat, _ = side["timeline"].at(step)
-            warm = kin.ik(pos, quat, q, max_iters=IK_ITERS)
-            result = kin.ik_again_from(warm, pos, quat, side["q_home"], max_iters=IK_ITERS)
-            from_home += result is not warm
+            result = kin.ik_tracking(pos, quat, q, side["q_home"], max_iters=IK_ITERS)
+            from_home += result.from_home
             q = result.q
             if result.pos_err_m > worst:
                 worst, worst_step = result.pos_err_m, step

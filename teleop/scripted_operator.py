@@ -223,9 +223,7 @@ class ScriptedOperator:
         ctrl = self.ctrl_home.copy()
         for name, (pos, quat, hand) in self.intent(step, data).items():
             side = self.sides[name]
-            kin = side["kin"]
-            result = kin.ik(pos, quat, side["q"], max_iters=IK_ITERS)
-            result = kin.ik_again_from(result, pos, quat, side["q_home"], max_iters=IK_ITERS)
+            result = side["kin"].ik_tracking(pos, quat, side["q"], side["q_home"], max_iters=IK_ITERS)
             side["q"] = result.q
             ctrl[side["arm_ids"]] = result.q
             ctrl[side["hand_ids"]] = hand
