@@ -1,7 +1,7 @@
 """The shared base of every catalog schema, and the one place that turns pydantic's findings into b2d errors.
 
 A catalog file (task, embodiment, arm, hand, sensor profile, channel, the paper's settings, policy config)
-is read with `yaml.safe_load` and checked by a pydantic model before a loader builds its objects. Models
+is read with PyYAML's safe loader and checked by a pydantic model before a loader builds its objects. Models
 refuse unknown keys (`extra="forbid"`), wrong types (strict: no "5" for 5, no `true` for 1) and
 out-of-range values; `validate` reports every finding as a `SpecError` naming the file, the field path
 (`objects.plate.mass`, `chain[2].range`) and what was expected, in the words the hand-written checks used
@@ -36,6 +36,9 @@ Vec3 = Annotated[list[Number], Field(min_length=3, max_length=3)]
 Vec4 = Annotated[list[Number], Field(min_length=4, max_length=4)]
 
 M = TypeVar("M", bound=BaseModel)
+# libyaml's scanner and parser under PyYAML's safe constructor: the same data as yaml.safe_load, 7x less CPU
+# (the 65 catalog files: 0.70 -> 0.09 s, paid by every fresh step process); the pure-Python one without libyaml
+SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class CatalogModel(BaseModel):
@@ -55,7 +58,7 @@ def read_yaml(path: Path | str, error: Callable = SpecError) -> dict:
     """One YAML mapping, loaded safely; a parse error or a non-mapping document names the file."""
     try:
         with open(path, encoding="utf-8") as f:
-            data = yaml.safe_load(f)
+            data = yaml.load(f, Loader=SAFE_LOADER)
     except yaml.YAMLError as exc:
         raise error(path, "<document>", f"valid YAML ({exc})") from exc
     if not isinstance(data, dict):
