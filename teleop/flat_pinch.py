@@ -156,10 +156,13 @@ def _flat_pinch_rotation(hand_name: str, side: str, ready: tuple) -> np.ndarray:
     return best
 
 
-def width_along(model: mujoco.MjModel, data: mujoco.MjData, body: int, axis: np.ndarray) -> float:
-    """How wide object ``body`` is along the horizontal line through its centre in direction ``axis``
-    (world): the span of that line inside its geoms' bounding boxes (a wrench's handle, not its head)."""
-    centre, u = data.xpos[body], np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
+def width_along(model: mujoco.MjModel, data: mujoco.MjData, body: int, axis: np.ndarray,
+                through: np.ndarray | None = None) -> float:
+    """How wide object ``body`` is along the horizontal line through its centre (or the world point
+    ``through``) in direction ``axis`` (world): the span of that line inside its geoms' bounding boxes
+    (a wrench's handle, not its head)."""
+    centre = data.xpos[body] if through is None else np.asarray(through, float)
+    u = np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
     lo, hi = np.inf, -np.inf
     for g in object_geoms(model, body):
         R = data.geom_xmat[g].reshape(3, 3)

@@ -119,7 +119,7 @@ class GraspFields(CatalogModel):
 
     grasps: ClassVar[tuple[str, ...]] = PLAN_GRASPS
     across: ClassVar[bool] = True          # grasp_yaw may be "across" (worked out for a hand closing from above)
-    part_pinch: ClassVar[bool] = False     # a pinch may take a grasp_point: the part it closes on (a rim)
+    part_pinch: ClassVar[bool] = False     # a pinch may take a grasp_point: the part it closes on (a rim, a handle)
 
     grasp: Name = "power"
     approach_pitch_deg: Number = Field(0.0, ge=APPROACH_PITCH_RANGE_DEG[0], le=APPROACH_PITCH_RANGE_DEG[1],
@@ -154,7 +154,7 @@ class GraspFields(CatalogModel):
     @classmethod
     def _not_with_a_pinch(cls, point, info: ValidationInfo):
         grasp = info.data.get("grasp")
-        if grasp == "flat_pinch" or (grasp == "pinch" and not cls.part_pinch):
+        if grasp in ("pinch", "flat_pinch") and not cls.part_pinch:
             raise ValueError(f"no grasp_point with grasp: {grasp} (the pinch finds its own)")
         return point
 
@@ -165,7 +165,8 @@ class PickStep(PlanStep, GraspFields):
     place_offset the spot on the table top). place_from: front slides it in level through the side a
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
-    object's frame; grasp: flat_pinch picks a thin object lying flat with the fingertips."""
+    object's frame; grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
+    its centre or of grasp_point (a spatula's handle clear of its blade)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True

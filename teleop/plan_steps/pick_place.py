@@ -85,7 +85,8 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     fingers' tips are its lowest points, yawed (`grasp_yaw`) and spread across the object, comes down
     until its lowest point presses onto the table beside the object, then closes in stages, the wrist
     following the lowest point as the fingers curl so the tips stay on the table, as a person picks
-    up a key. Returns (hand rotation, pre-shape, object centre from the wrist, closing keyframes)."""
+    up a key; the tips close either side of the object's centre, or of its `grasp_point`. Returns
+    (hand rotation, pre-shape, object centre from the wrist, closing keyframes)."""
     side = op.sides[item["hand"]]
     hand, left = side["hand"], item["hand"] == "left"
     obj = op.scene.task.objects[name]
@@ -93,6 +94,7 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     lo, hi = op.scene.model.actuator_ctrlrange[side["hand_ids"]].T
     close = np.clip(tip_pinch(hand).close, lo, hi)
     body_rot = data.xmat[body].reshape(3, 3)
+    at = body_rot @ grasp_point(item)       # the tips close there: the centre, or a grasp_point (a handle)
     mirror = mirror_vec if left else (lambda v: v)
 
     def turned(q_turn: np.ndarray, q_axis: np.ndarray) -> np.ndarray:
@@ -111,14 +113,15 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     touch = side["open"]
     for q_turn in (close, None):
         hand_rot = turned(touch if q_turn is None else q_turn, touch)
-        width = width_along(op.scene.model, data, body, hand_rot @ mirror(tip_axis(hand, touch)))
+        width = width_along(op.scene.model, data, body, hand_rot @ mirror(tip_axis(hand, touch)),
+                            data.xpos[body] + at)
         touch, centre = tip_preshape(hand, side["open"], close, width)
     ready, _ = tip_preshape(hand, side["open"], close, width + PINCH_SPREAD_MARGIN_M)
     bottom = float(bounding_box_points(op.scene.model, data, body)[:, 2].min()) - FLAT_PINCH_PRESS_M
     shapes = [ready + k / FLAT_PINCH_STAGES * (close - ready) for k in range(FLAT_PINCH_STAGES + 1)]
     below = [float(-(hand_outline(hand, item["hand"], q) @ hand_rot.T)[:, 2].min()) for q in shapes]
     obj_z = op.object_pos(data, name)[2]
-    offset = np.array([*(hand_rot @ mirror(centre))[:2], obj_z - (bottom + below[0])])
+    offset = np.array([*((hand_rot @ mirror(centre))[:2] - at[:2]), obj_z - (bottom + below[0])])
     per = (DURATIONS["close"] + DURATIONS["close_late"]) // FLAT_PINCH_STAGES
     closing = [(per, q, bottom + b) for q, b in zip(shapes[1:], below[1:])]
     return hand_rot, ready, offset, closing

@@ -13,7 +13,8 @@ from teleop.recorder import record_episode
 
 # (task, paper embodiment, demonstration episode index that succeeds). citrus_plate_loading is
 # guarded by tests/test_scripted_operator.py, cleaner_box_loading by tests/teleop/test_plan_carry_return_home.py,
-# toilet_lid_cleaner_pour by tests/teleop/test_plan_pour_tilt_toward.py.
+# toilet_lid_cleaner_pour by tests/teleop/test_plan_pour_tilt_toward.py, baking_tray_prep by
+# tests/teleop/test_plan_baking_tray.py.
 SETTINGS = [
     ("ball_box_loading", "ur5_wuji", 11),
     ("bimanual_piano_melody", "xarm7_ability", 0),
@@ -28,7 +29,7 @@ SETTINGS = [
     ("trash_disposal", "ur5_rh56dfx", 0),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
 ]
-GUARDED_ELSEWHERE = {"citrus_plate_loading", "cleaner_box_loading", "toilet_lid_cleaner_pour"}
+GUARDED_ELSEWHERE = {"baking_tray_prep", "citrus_plate_loading", "cleaner_box_loading", "toilet_lid_cleaner_pour"}
 
 
 @pytest.mark.parametrize(("task", "embodiment", "episode"), SETTINGS, ids=[s[0] for s in SETTINGS])

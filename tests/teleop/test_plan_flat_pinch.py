@@ -1,6 +1,7 @@
 """`grasp: flat_pinch`: the plan check refuses what it cannot use, the tip pinch found from the
 hand's kinematics, and a real lift of a 1.6 cm jigsaw piece off the table."""
 
+import numpy as np
 import pytest
 import yaml
 
@@ -32,7 +33,6 @@ def test_flat_pinch_is_a_plan_grasp(tmp_path):
 
 
 @pytest.mark.parametrize(("field", "value", "expected"), [
-    ("grasp_point", [0.0, 0.0, 0.0], "no grasp_point with grasp: flat_pinch"),
     ("approach_pitch_deg", 30, "no approach_pitch_deg with grasp: flat_pinch"),
     ("grasp", "flat", "one of .*'flat_pinch'"),
 ])
@@ -70,6 +70,24 @@ def test_flat_pinch_lifts_a_jigsaw_piece():
     for step in range(lifted):
         physics.step_control(scene.model, data, op.act(step, data))
     assert data.xpos[body][2] - z0 > 0.08
+
+
+def test_a_flat_pinch_closes_either_side_of_its_grasp_point():
+    """grasp_point moves where the tips close (a spatula's handle clear of its blade): the hand's
+    plan shifts by the point, turned with the object, and the hand keeps its turn."""
+    from teleop.plan_steps.pick_place import flat_pinch
+    spec = load_task(TASK)
+    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    point = [0.02, -0.01, 0.0]
+    rot, _, centred, _ = flat_pinch(op, data, dict(PICK), "green_piece")
+    rot_at, _, at, _ = flat_pinch(op, data, {**PICK, "grasp_point": point}, "green_piece")
+    body_rot = data.xmat[scene.object_body_ids["green_piece"]].reshape(3, 3)
+    assert np.allclose(rot_at, rot)
+    assert np.allclose(at[:2], centred[:2] - (body_rot @ point)[:2], atol=1e-9)
+    assert parse_task(_raw({**PICK, "grasp_point": point}), spec.source).demo_plan[0]["grasp_point"] == point
 
 
 def test_flat_pinch_is_for_pick_steps_only(tmp_path):

@@ -157,15 +157,14 @@ def test_bad_grasp_pose_fields_name_file_and_field(tmp_path, field, bad):
         parse_task(raw, tmp_path / "balls.yaml")
 
 
-def test_a_picks_pinch_may_name_the_part_it_closes_on_a_flat_pinch_may_not(tmp_path):
-    """A pick's pinch at a grasp_point closes on the part there (teleop/plan_steps/part_pinch.py);
-    flat_pinch finds its own hold (pour and strike: tests/teleop/test_plan_pour.py, test_plan_strike.py)."""
+def test_a_picks_pinch_may_name_the_part_it_closes_on(tmp_path):
+    """A pick's pinch at a grasp_point closes on the part there (teleop/plan_steps/part_pinch.py), a
+    flat_pinch's tips either side of it (tests/teleop/test_plan_flat_pinch.py; pour and strike:
+    tests/teleop/test_plan_pour.py, test_plan_strike.py)."""
     raw = yaml.safe_load(load_task("ball_box_loading").source.read_text())
-    raw["demo_plan"][0].update(grasp="pinch", grasp_point=[0.0, 0.0, 0.01])
-    assert parse_task(raw, tmp_path / "balls.yaml").demo_plan[0]["grasp_point"] == [0.0, 0.0, 0.01]
-    raw["demo_plan"][0].update(grasp="flat_pinch")
-    with pytest.raises(SpecError, match=r"demo_plan\[0\].grasp_point'.*flat_pinch"):
-        parse_task(raw, tmp_path / "balls.yaml")
+    for grasp in ("pinch", "flat_pinch"):
+        raw["demo_plan"][0].update(grasp=grasp, grasp_point=[0.0, 0.0, 0.01])
+        assert parse_task(raw, tmp_path / "balls.yaml").demo_plan[0]["grasp_point"] == [0.0, 0.0, 0.01]
 
 
 @pytest.mark.parametrize("pinch", [False, True])
