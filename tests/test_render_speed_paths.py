@@ -14,8 +14,9 @@ from sim.render import CameraRig, set_positions
 from sim.scene.builder import demonstration_scene
 from teleop.recorder import home
 
+from render_reference import mujoco_renderer_images
+
 CAMERAS = ["chest", "overhead", "stereo_left", "stereo_right", "left_wrist", "right_wrist"]
-GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
 
 
 def _profile(width, height, modalities=("rgb", "depth"), cameras=CAMERAS):
@@ -38,25 +39,6 @@ def scene_states():
         q[scene.robot_qpos_adr] += rng.normal(0.0, 0.35, len(scene.robot_qpos_adr))
         states.append(q)
     return scene, data, states
-
-
-def _reference(model, data, camera, width, height):
-    """mujoco.Renderer's RGB, depth and geom ids (-1: no geom), shadows and reflections off as in the rig."""
-    with mujoco.Renderer(model, height=height, width=width) as renderer:
-        def update():
-            renderer.update_scene(data, camera=camera)
-            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-
-        update()
-        rgb = renderer.render()
-        renderer.enable_depth_rendering()
-        update()
-        depth = renderer.render()
-        renderer.enable_segmentation_rendering()
-        update()
-        seg = renderer.render()
-    return rgb, depth, np.where(seg[..., 1] == GEOM, seg[..., 0], -1).astype(np.int32)
 
 
 def _spy_geom_counts(monkeypatch):
@@ -96,7 +78,7 @@ def test_capture_equals_mujoco_renderer_bytes(scene_states, size, monkeypatch):
     for q, shot in zip(states, shots):
         set_positions(model, data, q)
         for cam in CAMERAS:
-            rgb, depth, geom_ids = _reference(model, data, cam, width, height)
+            rgb, depth, geom_ids = mujoco_renderer_images(model, data, cam, width, height)
             got = shot[cam]
             assert got["rgb"].dtype == np.uint8 and got["rgb"].tobytes() == rgb.tobytes(), cam
             assert got["depth_m"].dtype == np.float32 and got["depth_m"].tobytes() == depth.tobytes(), cam
@@ -115,7 +97,8 @@ def test_policy_views_equal_mujoco_renderer_bytes(scene_states):
             shot = rig.capture(data)
             for cam in views:
                 assert set(shot[cam]) == {"rgb"}
-                assert shot[cam]["rgb"].tobytes() == _reference(model, data, cam, 64, 48)[0].tobytes(), cam
+                reference_rgb = mujoco_renderer_images(model, data, cam, 64, 48)[0]
+                assert shot[cam]["rgb"].tobytes() == reference_rgb.tobytes(), cam
     finally:
         rig.close()
 
@@ -185,7 +168,7 @@ def test_geoms_at_the_frustum_edge(transparent, monkeypatch):
         assert drawn_rgb == drawn_ids
     else:
         assert drawn_rgb < drawn_ids
-    ref_rgb, ref_depth, ref_ids = _reference(model, data, "cam", width, height)
+    ref_rgb, ref_depth, ref_ids = mujoco_renderer_images(model, data, "cam", width, height)
     assert len(np.unique(ref_ids)) > 10      # many geoms do show
     assert rgb.tobytes() == ref_rgb.tobytes()
     assert depth.tobytes() == ref_depth.tobytes()

@@ -15,8 +15,9 @@ from sim.render import CameraRig, set_positions
 from sim.scene.builder import demonstration_scene
 from teleop.recorder import home
 
+from render_reference import mujoco_renderer_images
+
 CAMERAS = ["chest", "overhead", "stereo_left", "stereo_right", "left_wrist", "right_wrist"]
-GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
 
 
 def _profile(width, height, cameras=CAMERAS, modalities=("rgb", "depth", "segmentation"), rate_hz=10):
@@ -102,24 +103,6 @@ def _tie_model(welded_first: bool) -> mujoco.MjModel:
     return mujoco.MjModel.from_xml_string(xml)
 
 
-def _reference(model, data, width, height):
-    with mujoco.Renderer(model, height=height, width=width) as renderer:
-        def update():
-            renderer.update_scene(data, camera="cam")
-            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-
-        update()
-        rgb = renderer.render()
-        renderer.enable_depth_rendering()
-        update()
-        depth = renderer.render()
-        renderer.enable_segmentation_rendering()
-        update()
-        seg = renderer.render()
-    return rgb, depth, np.where(seg[..., 1] == GEOM, seg[..., 0], -1).astype(np.int32)
-
-
 @pytest.mark.parametrize("welded_first", [True, False])
 def test_depth_ties_go_to_the_geom_drawn_later(welded_first):
     model = _tie_model(welded_first)
@@ -135,7 +118,7 @@ def test_depth_ties_go_to_the_geom_drawn_later(welded_first):
         assert off._merged is not None and off._layers[0].rgb is not None, "the layer was not used"
     finally:
         off.close()
-    ref_rgb, ref_depth, ref_ids = _reference(model, data, width, height)
+    ref_rgb, ref_depth, ref_ids = mujoco_renderer_images(model, data, "cam", width, height)
     mover = model.body("mover").id
     later = max(g for g in range(model.ngeom) if model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX)
     assert (ref_ids == later).sum() > 200          # the tie is real and decided by draw order
@@ -177,7 +160,7 @@ def test_a_changed_welded_geom_or_light_is_rendered_anew():
             off.update(data, 0)
             depth, geom_ids = off.depth_and_geoms(True)
             rgb = off.color()
-            ref_rgb, ref_depth, ref_ids = _reference(model, data, width, height)
+            ref_rgb, ref_depth, ref_ids = mujoco_renderer_images(model, data, "cam", width, height)
             assert rgb.tobytes() == ref_rgb.tobytes(), change
             assert depth.tobytes() == ref_depth.tobytes() and geom_ids.tobytes() == ref_ids.tobytes(), change
     finally:
