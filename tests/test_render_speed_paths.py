@@ -14,7 +14,7 @@ from sim.render import CameraRig, set_positions
 from sim.scene.builder import demonstration_scene
 from teleop.recorder import home
 
-from render_reference import mujoco_renderer_images
+from render_reference import count_render_calls, mujoco_renderer_images
 
 CAMERAS = ["chest", "overhead", "stereo_left", "stereo_right", "left_wrist", "right_wrist"]
 
@@ -41,19 +41,6 @@ def scene_states():
     return scene, data, states
 
 
-def _spy_geom_counts(monkeypatch):
-    """Geoms drawn per mjr_render call: (segmentation pass?, ngeom, geoms placed)."""
-    calls = []
-    real = mujoco.mjr_render
-
-    def spy(rect, scene, con):
-        calls.append((bool(scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT]), scene.ngeom))
-        real(rect, scene, con)
-
-    monkeypatch.setattr(mujoco, "mjr_render", spy)
-    return calls
-
-
 @pytest.mark.parametrize("size", [(64, 48), (128, 96)])
 def test_capture_equals_mujoco_renderer_bytes(scene_states, size, monkeypatch):
     """RGB, depth and segmentation of all six cameras, four poses, two resolutions: byte for byte
@@ -63,7 +50,7 @@ def test_capture_equals_mujoco_renderer_bytes(scene_states, size, monkeypatch):
     width, height = size
     rig = CameraRig(model, _profile(width, height), segments=True)
     assert rig.renderer._geoms is not None, "the geom buffer view did not match this MuJoCo: nothing is culled"
-    calls = _spy_geom_counts(monkeypatch)
+    calls = count_render_calls(monkeypatch)
     try:
         shots = []
         for q in states:
@@ -154,7 +141,7 @@ def test_geoms_at_the_frustum_edge(transparent, monkeypatch):
     mujoco.mj_forward(model, data)
     width, height = 160, 120
     off = OffscreenRenderer(model, width, height)
-    calls = _spy_geom_counts(monkeypatch)
+    calls = count_render_calls(monkeypatch)
     try:
         off.update(data, 0)
         depth, geom_ids = off.depth_and_geoms(True)

@@ -15,7 +15,7 @@ from sim.render import CameraRig, set_positions
 from sim.scene.builder import demonstration_scene
 from teleop.recorder import home
 
-from render_reference import mujoco_renderer_images
+from render_reference import count_render_calls, mujoco_renderer_images
 
 CAMERAS = ["chest", "overhead", "stereo_left", "stereo_right", "left_wrist", "right_wrist"]
 
@@ -24,19 +24,6 @@ def _profile(width, height, cameras=CAMERAS, modalities=("rgb", "depth", "segmen
     return parse_sensor_profile({"name": "still_layers", "rate_hz": rate_hz,
                                  "cameras": {"ids": list(cameras), "width": width, "height": height,
                                              "modalities": list(modalities)}})
-
-
-def _spy_renders(monkeypatch):
-    """(segmentation pass?, geoms drawn) per mjr_render call."""
-    calls = []
-    real = mujoco.mjr_render
-
-    def spy(rect, scene, con):
-        calls.append((bool(scene.flags[mujoco.mjtRndFlag.mjRND_SEGMENT]), scene.ngeom))
-        real(rect, scene, con)
-
-    monkeypatch.setattr(mujoco, "mjr_render", spy)
-    return calls
 
 
 def test_foundation_cameras_same_bytes_as_whole_passes(monkeypatch):
@@ -65,7 +52,7 @@ def test_foundation_cameras_same_bytes_as_whole_passes(monkeypatch):
         assert set(layers) == {model.camera(c).id for c in still}
         assert all(layer.ids is not None and layer.rgb is not None for layer in layers.values())
         # a layered frame draws fewer geoms than the whole pass of the same camera
-        calls = _spy_renders(monkeypatch)
+        calls = count_render_calls(monkeypatch)
         set_positions(model, data, states[-1])
         layered.capture(data)
         layered_ids = [n for seg, n in calls if seg]
