@@ -39,7 +39,6 @@ POUR_DEFAULT_GRASP = "side"
 TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
 
 
-
 def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
@@ -82,6 +81,10 @@ def _object(value: str, info: ValidationInfo, *, but: tuple = (), extra: tuple =
     return _one_of(value, [*names, *extra], f"an object from {names}{also}")
 
 
+# a field naming one of the task's objects
+TaskObject = Annotated[Name, BeforeValidator(lambda name, info: _object(name, info))]
+
+
 def _hinges(info: ValidationInfo) -> dict:
     return {f"{n}/{link.name}": link.joint.range for n, o in _scope(info).objects.items() for link in o.links
             if link.joint.type == "hinge"}
@@ -96,7 +99,7 @@ class PlanStep(CatalogModel):
 
     hand: Name
     after: list[Int] = []
-    wait_s: Number = Field(0.0, ge=WAIT_RANGE_S[0], le=WAIT_RANGE_S[1], description="seconds in [0, 60]")
+    wait_s: Number = Field(0.0, ge=WAIT_RANGE_S[0], le=WAIT_RANGE_S[1], description=f"seconds in [{WAIT_RANGE_S[0]:g}, {WAIT_RANGE_S[1]:g}]")
 
     @field_validator("hand", mode="before")
     @classmethod
@@ -123,7 +126,8 @@ class GraspFields(CatalogModel):
 
     grasp: Name = "power"
     approach_pitch_deg: Number = Field(0.0, ge=APPROACH_PITCH_RANGE_DEG[0], le=APPROACH_PITCH_RANGE_DEG[1],
-                                       description="degrees in [0, 80]")
+                                       description=f"degrees in [{APPROACH_PITCH_RANGE_DEG[0]:g}, "
+                                                   f"{APPROACH_PITCH_RANGE_DEG[1]:g}]")
     grasp_yaw: Number | Literal["across"] = 0.0     # checked whole by _yaw
     grasp_point: ObjectPoint = None
 
@@ -171,15 +175,10 @@ class PickStep(PlanStep, GraspFields):
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
 
-    pick: Name
+    pick: TaskObject
     place_from: Name = "above"              # before `place`, which it constrains
     place: Name
     place_offset: PlaceOffset = None
-
-    @field_validator("pick", mode="before")
-    @classmethod
-    def _an_object(cls, name: str, info: ValidationInfo) -> str:
-        return _object(name, info)
 
     @field_validator("place_from", mode="before")
     @classmethod
@@ -264,7 +263,7 @@ class PourStep(PlanStep, GraspFields):
     into: Name
     grasp: Name = POUR_DEFAULT_GRASP
     tilt_deg: Number = Field(POUR_DEFAULT_TILT_DEG, ge=POUR_TILT_RANGE_DEG[0], le=POUR_TILT_RANGE_DEG[1],
-                             description="degrees in [50, 150]")
+                             description=f"degrees in [{POUR_TILT_RANGE_DEG[0]:g}, {POUR_TILT_RANGE_DEG[1]:g}]")
     place_offset: TableSpot = None
     tilt_toward: TableDirection = None
 
@@ -299,7 +298,8 @@ class TurnStep(PlanStep):
     to: Number
     palm_from: Number = None
     speed: Number = Field(None, gt=TURN_SPEED_RANGE_M_S[0], le=TURN_SPEED_RANGE_M_S[1],
-                          description="m/s of the contact along the arc in (0, 0.3]")
+                          description=f"m/s of the contact along the arc in ({TURN_SPEED_RANGE_M_S[0]:g}, "
+                                      f"{TURN_SPEED_RANGE_M_S[1]:g}]")
 
     @field_validator("turn", mode="before")
     @classmethod
@@ -325,16 +325,11 @@ class StrikeStep(PlanStep, GraspFields):
     target object once with the tool's strike_point (tool frame, on the tool), then put the tool onto or
     into `place` (an object, or `table` with place_offset a spot of the table top)."""
 
-    strike: Name
+    strike: TaskObject
     tool: Name
     strike_point: ObjectPoint
     place: Name
     place_offset: PlaceOffset = None
-
-    @field_validator("strike", mode="before")
-    @classmethod
-    def _a_target(cls, name: str, info: ValidationInfo) -> str:
-        return _object(name, info)
 
     @field_validator("tool", mode="before")
     @classmethod
@@ -367,16 +362,11 @@ class CarryStep(PlanStep):
 
     hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
 
-    carry: Name
+    carry: TaskObject
     place: Name
     place_offset: PlaceOffset = None
     grasp_height: Number = 0.0
     return_home: Bool = False
-
-    @field_validator("carry", mode="before")
-    @classmethod
-    def _an_object(cls, name: str, info: ValidationInfo) -> str:
-        return _object(name, info)
 
     @field_validator("place", mode="before")
     @classmethod
