@@ -209,49 +209,67 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
                      "counted as overhead; physics_replay includes the evaluator")}
 
 
-def _tessellation_comparison(replay_path: Path, profile) -> dict:
-    """The cameras of a profile that sets its own tessellation against the same profile at MuJoCo's default
-    (what it rendered before it had one), frame by frame on the same poses, alternating (so both see the
-    same load): this thread's CPU time per frame and the share of pixels that differ."""
-    import dataclasses
-
+def _cameras_two_ways(replay_path: Path, profile, make_rigs, compare) -> tuple[dict, int]:
+    """Every frame of a replay captured by two camera rigs in turn, on the same poses, alternating which
+    goes first (so both see the same load): this thread's CPU seconds per rig (all of the GL work when
+    LP_NUM_THREADS=0, as b2d bench sets it) and the number of frames. ``make_rigs(model)`` gives the two
+    rigs by name; ``compare(shots)`` sees each frame's captures by rig name."""
     import h5py
     import mujoco
 
     from episodes.replay_frames import RawView
     from episodes.stages import frame_steps
-    from sim.render import CameraRig, set_positions
+    from sim.render import set_positions
     from sim.replay import scene_for
 
     with h5py.File(replay_path, "r") as src:
         scene = scene_for(RawView(src), replay_path)
         qpos = src["qpos"][()]
     model, data = scene.model, mujoco.MjData(scene.model)
-    default = dataclasses.replace(profile, tessellation=None)
-    rigs = {"profile": CameraRig(model, profile), "mujoco_default": CameraRig(model, default)}
+    rigs = make_rigs(model)
+    names = list(rigs)
     cpu = {k: 0.0 for k in rigs}
-    rgb_changed, depth_changed = [], []
     steps = frame_steps(len(qpos), profile.rate_hz)
     try:
-        for step in steps:
+        for k, step in enumerate(steps):
             set_positions(model, data, qpos[step])
             shots = {}
-            for name, rig in rigs.items():
+            for name in (names if k % 2 == 0 else names[::-1]):
                 t0 = time.thread_time()
-                shots[name] = rig.capture(data)
+                shots[name] = rigs[name].capture(data)
                 cpu[name] += time.thread_time() - t0
-            for cam, shot in shots["profile"].items():
-                ref = shots["mujoco_default"][cam]
-                if "rgb" in shot:
-                    rgb_changed.append(float((shot["rgb"] != ref["rgb"]).any(axis=-1).mean()))
-                if "depth_m" in shot:
-                    depth_changed.append(float((np.abs(shot["depth_m"] - ref["depth_m"]) > 0.002).mean()))
+            compare(shots)
     finally:
         for rig in rigs.values():
             rig.close()
+    return cpu, len(steps)
+
+
+def _tessellation_comparison(replay_path: Path, profile) -> dict:
+    """The cameras of a profile that sets its own tessellation against the same profile at MuJoCo's default
+    (what it rendered before it had one), frame by frame on the same poses, alternating (so both see the
+    same load): this thread's CPU time per frame and the share of pixels that differ."""
+    import dataclasses
+
+    from sim.render import CameraRig
+
+    default = dataclasses.replace(profile, tessellation=None)
+    rgb_changed, depth_changed = [], []
+
+    def compare(shots: dict) -> None:
+        for cam, shot in shots["profile"].items():
+            ref = shots["mujoco_default"][cam]
+            if "rgb" in shot:
+                rgb_changed.append(float((shot["rgb"] != ref["rgb"]).any(axis=-1).mean()))
+            if "depth_m" in shot:
+                depth_changed.append(float((np.abs(shot["depth_m"] - ref["depth_m"]) > 0.002).mean()))
+
+    cpu, frames = _cameras_two_ways(
+        replay_path, profile,
+        lambda model: {"profile": CameraRig(model, profile), "mujoco_default": CameraRig(model, default)}, compare)
     return {"tessellation": list(profile.tessellation), "mujoco_default": list(MUJOCO_TESSELLATION),
-            "camera_cpu_ms_per_frame": round(1e3 * cpu["profile"] / len(steps), 3),
-            "camera_cpu_ms_per_frame_mujoco_default": round(1e3 * cpu["mujoco_default"] / len(steps), 3),
+            "camera_cpu_ms_per_frame": round(1e3 * cpu["profile"] / frames, 3),
+            "camera_cpu_ms_per_frame_mujoco_default": round(1e3 * cpu["mujoco_default"] / frames, 3),
             "camera_speedup": round(cpu["mujoco_default"] / max(cpu["profile"], 1e-9), 3),
             "rgb_pixels_changed": round(float(np.mean(rgb_changed)), 4) if rgb_changed else None,
             "depth_pixels_changed_over_2mm": round(float(np.mean(depth_changed)), 4) if depth_changed else None,
@@ -264,47 +282,31 @@ def _still_layer_comparison(replay_path: Path, profile) -> dict:
     render stage's way) against every pass rendered whole (the code before them), frame by frame on the
     same poses, alternating which goes first: this thread's CPU time per frame and whether every image
     is byte-identical."""
-    import h5py
-    import mujoco
+    from sim.render import CameraRig
+    from sim.still_layers import still_cameras, welded_bodies
 
-    from episodes.replay_frames import RawView
-    from episodes.stages import frame_steps
-    from sim.render import CameraRig, set_positions
-    from sim.replay import scene_for
-
-    with h5py.File(replay_path, "r") as src:
-        scene = scene_for(RawView(src), replay_path)
-        qpos = src["qpos"][()]
-    model, data = scene.model, mujoco.MjData(scene.model)
     segments = any(m in profile.modalities for m in ("segmentation", "box2d"))
-    rigs = {"layers": CameraRig(model, profile, segments=segments),
-            "whole": CameraRig(model, profile, segments=segments, still_layers=False)}
-    still = sorted(model.camera(i).name for i in rigs["layers"].renderer._still_cameras
-                   if model.camera(i).name in profile.camera_ids)
-    cpu = {k: 0.0 for k in rigs}
-    identical = True
-    steps = frame_steps(len(qpos), profile.rate_hz)
-    try:
-        for k, step in enumerate(steps):
-            set_positions(model, data, qpos[step])
-            shots = {}
-            for name in (("layers", "whole") if k % 2 == 0 else ("whole", "layers")):
-                t0 = time.thread_time()
-                shots[name] = rigs[name].capture(data)
-                cpu[name] += time.thread_time() - t0
-            for cam, shot in shots["whole"].items():
-                other = shots["layers"][cam]
-                for key, image in shot.items():
-                    a, b = (image.index, other[key].index) if key == "segments" else (image, other[key])
-                    identical &= a.tobytes() == b.tobytes()
-    finally:
-        for rig in rigs.values():
-            rig.close()
+    identical, still = [True], []
+
+    def make_rigs(model) -> dict:
+        still.extend(sorted(model.camera(i).name for i in still_cameras(model, welded_bodies(model))
+                            if model.camera(i).name in profile.camera_ids))
+        return {"layers": CameraRig(model, profile, segments=segments),
+                "whole": CameraRig(model, profile, segments=segments, still_layers=False)}
+
+    def compare(shots: dict) -> None:
+        for cam, shot in shots["whole"].items():
+            other = shots["layers"][cam]
+            for key, image in shot.items():
+                a, b = (image.index, other[key].index) if key == "segments" else (image, other[key])
+                identical[0] &= a.tobytes() == b.tobytes()
+
+    cpu, frames = _cameras_two_ways(replay_path, profile, make_rigs, compare)
     return {"still_cameras": still,
-            "camera_cpu_ms_per_frame": round(1e3 * cpu["layers"] / len(steps), 3),
-            "camera_cpu_ms_per_frame_whole_passes": round(1e3 * cpu["whole"] / len(steps), 3),
+            "camera_cpu_ms_per_frame": round(1e3 * cpu["layers"] / frames, 3),
+            "camera_cpu_ms_per_frame_whole_passes": round(1e3 * cpu["whole"] / frames, 3),
             "camera_speedup": round(cpu["whole"] / max(cpu["layers"], 1e-9), 3),
-            "images_identical": bool(identical),
+            "images_identical": bool(identical[0]),
             "note": "every camera of every frame rendered both ways in turn (CPU time of this thread); "
                     "frames_per_cpu_second_whole_passes = this run's frames_per_cpu_second with the "
                     "camera time of whole passes instead (the code before the layers), and _speedup the ratio"}
