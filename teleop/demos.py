@@ -13,9 +13,9 @@ from pathlib import Path
 
 from episodes.raw import write_raw
 from sim.errors import SpecError
-from sim.registry import names, validate_name
+from sim.registry import validate_name
 from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
@@ -50,11 +50,10 @@ def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Pa
     if not spec.demo_plan:     # fail once, before any scene is built, rather than record idle episodes
         raise SpecError(spec.source, "demo_plan", "a pick-and-place plan for the scripted operator",
                         "none: this task has no scripted demonstration yet")
-    task_index = names("tasks").index(task)
     results = []
     for i in range(first_index, first_index + episodes):
         episode_id = f"{i:04d}"
-        seed = task_seed(task_index, i)
+        seed = demonstration_seed(task, i)
         try:
             scene = build_scene(spec, embodiment, demonstration_sample(spec, seed))
             rec = record_episode(scene, OPERATORS[operator](), episode_id, seed, max_steps=max_steps)

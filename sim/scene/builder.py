@@ -13,8 +13,8 @@ from sim import physics
 from sim.embodiment import add_bimanual_robot
 from sim.scene.objects import add_free_object, add_task_object, yaw_quat
 from sim.scene.parts import Part, euler_quat
-from sim.scene.sample import SceneSample
-from sim.tasks import TaskSpec
+from sim.scene.sample import SceneSample, demonstration_sample, demonstration_seed
+from sim.tasks import TaskSpec, load_task
 
 OFFSCREEN_WIDTH, OFFSCREEN_HEIGHT = 640, 480   # the paper's camera resolution bounds every profile
 PLACEMENT_GAP_M = 0.001
@@ -199,11 +199,8 @@ def _perturb_cameras(model: mujoco.MjModel, offsets: dict[str, dict], look_dista
         model.cam_quat[cid] = final
 
 
-def demonstration_scene(task: str, embodiment: str, index: int = 0) -> Scene:
-    """The scene of a task's demonstration `index` on an embodiment (its seed and scene sample)."""
-    from sim.registry import names
-    from sim.scene.sample import demonstration_sample, task_seed
-    from sim.tasks import load_task
-
-    spec = load_task(task)
-    return build_scene(spec, embodiment, demonstration_sample(spec, task_seed(names("tasks").index(task), index)))
+def demonstration_scene(task: str | TaskSpec, embodiment: str, index: int = 0) -> Scene:
+    """The scene of a task's demonstration `index` on an embodiment (its seed and scene sample). `task`
+    is a name or a spec; a spec (e.g. a task file with a changed layout or plan) keeps its name's seed."""
+    spec = load_task(task) if isinstance(task, str) else task
+    return build_scene(spec, embodiment, demonstration_sample(spec, demonstration_seed(spec.name, index)))

@@ -13,7 +13,7 @@ from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
-from sim.registry import Channel
+from sim.registry import Channel, names
 from sim.scene import assets
 from sim.tasks import TaskSpec
 
@@ -55,6 +55,11 @@ class SceneSample:
 
 def task_seed(task_index: int, episode_index: int) -> int:
     return task_index * SEED_NAMESPACE + episode_index
+
+
+def demonstration_seed(task: str, index: int) -> int:
+    """The seed of a task's demonstration `index` (`b2d record`'s episode `index`)."""
+    return task_seed(names("tasks").index(task), index)
 
 
 # ---------------------------------------------------------------- equivariance factors

@@ -6,7 +6,7 @@ import pytest
 
 from sim.registry import names
 from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS
 from teleop.recorder import record_episode
@@ -36,7 +36,7 @@ GUARDED_ELSEWHERE = {"baking_tray_prep", "citrus_plate_loading", "cleaner_box_lo
 def test_setting_demo_reaches_stable_success(task, embodiment, episode):
     spec = load_task(task)
     assert spec.paper_embodiment == embodiment
-    seed = task_seed(names("tasks").index(task), episode)
+    seed = demonstration_seed(task, episode)
     scene = build_scene(spec, embodiment, demonstration_sample(spec, seed))
     rec = record_episode(scene, OPERATORS[DEFAULT_OPERATOR](), f"{episode:04d}", seed)
     record = rec.extra["episode_record"]

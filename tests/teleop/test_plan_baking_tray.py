@@ -2,9 +2,8 @@
 grasp_point (the spatula's handle clear of its blade, the brush by its bristles), the boxes with a pad
 pinch, all four onto the tray (b2d bench demos measures seeds 0-11: 10/12)."""
 
-from sim.registry import names
 from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import OPERATORS
 from teleop.recorder import record_episode
@@ -16,7 +15,7 @@ def test_the_plan_sets_all_four_onto_the_tray():
     spec = load_task(TASK)
     flat = {s["pick"]: s.get("grasp_point") for s in spec.demo_plan if s.get("grasp") == "flat_pinch"}
     assert set(flat) == {"spatula", "brush"} and all(flat.values())
-    seed = task_seed(names("tasks").index(TASK), EPISODE)
+    seed = demonstration_seed(TASK, EPISODE)
     scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, seed))
     rec = record_episode(scene, OPERATORS["stream"](), f"{EPISODE:04d}", seed)
     record = rec.extra["episode_record"]

@@ -12,9 +12,8 @@ import pytest
 
 from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
-from sim.registry import names
 from sim.scene.builder import build_scene, demonstration_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS
 from teleop.recorder import home, record_episode
@@ -66,7 +65,7 @@ def test_the_mouth_tips_the_way_tilt_toward_says():
 def test_the_task_plan_opens_pours_and_closes():
     spec = load_task(TASK)
     assert any(step.get("tilt_toward") for step in spec.demo_plan)
-    seed = task_seed(names("tasks").index(TASK), SEED)
+    seed = demonstration_seed(TASK, SEED)
     scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, seed))
     rec = record_episode(scene, OPERATORS[DEFAULT_OPERATOR](), f"{SEED:04d}", seed)
     record = rec.extra["episode_record"]

@@ -8,9 +8,7 @@ import pytest
 from sim import physics
 from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
 from teleop.plan_steps.strike import STRIKE_FOLLOW_M, STRIKE_RISE_M, swing_steps
 from teleop.recorder import EpisodeRecording, home
@@ -61,7 +59,7 @@ def _scene(before=()):
     plan = parse_plan("t.yaml", {"demo_plan": [*before, {**STEP, "after": list(range(len(before)))}]},
                       PlanScope(spec.objects, spec.zones, spec.points))
     spec = dataclasses.replace(spec, metrics=metrics, demo_plan=plan)
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(spec, EMBODIMENT)
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)

@@ -12,10 +12,7 @@ import pytest
 from episodes.raw import read_raw
 from episodes.stages import replay_to_file
 from sim.embodiment import hand_names, load_hand
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
-from sim.tasks import load_task
+from sim.scene.builder import demonstration_scene
 from teleop.demos import record_demonstrations
 from teleop.recorder import home, record_episode
 from teleop.retarget import DexPilotRetargeter, HandKinematics
@@ -80,8 +77,7 @@ def test_every_hand_reproduces_the_plans_fingertips(hand):
 
 @functools.lru_cache(maxsize=None)
 def scene(task: str = TASK, embodiment: str = EMBODIMENT):
-    spec = load_task(task)
-    return build_scene(spec, embodiment, demonstration_sample(spec, task_seed(names("tasks").index(task), 0)))
+    return demonstration_scene(task, embodiment)
 
 
 @pytest.mark.parametrize("embodiment", sorted(SETTINGS))

@@ -12,10 +12,7 @@ import pytest
 
 from episodes.raw import read_raw, write_raw
 from sim.errors import SpecError
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
-from sim.tasks import load_task
+from sim.scene.builder import demonstration_scene
 from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
 from teleop.session_driver import StreamOperator
@@ -28,8 +25,7 @@ TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
 
 @functools.lru_cache(maxsize=None)
 def scene():
-    spec = load_task(TASK)
-    return build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    return demonstration_scene(TASK, EMBODIMENT)
 
 
 @pytest.fixture(scope="module")
