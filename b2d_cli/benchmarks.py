@@ -162,6 +162,7 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
             parallel = parallel_render_figures(tmp / "e.replay.h5", profile, workers, tmp)
         comparison = _tessellation_comparison(tmp / "e.replay.h5", profile) if profile.tessellation else {}
         layers = _still_layer_comparison(tmp / "e.replay.h5", profile)
+        setup_ways = _renderer_setup_comparison(task, embodiment, profile)
     frames, total = info["frames"], t3 - t0
     cpu_per_frame = max(cpu - info["setup_cpu_s"], 1e-9) / frames
     whole_per_frame = cpu_per_frame + (layers["camera_cpu_ms_per_frame_whole_passes"]
@@ -198,6 +199,7 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
             **({"parallel_render": parallel} if parallel else {}),
             **({"tessellation_vs_mujoco_default": comparison} if comparison else {}),
             "still_layers_vs_whole_passes": layers,
+            "renderer_setup_now_vs_before": setup_ways,
             "load_average_1min": round(os.getloadavg()[0], 2),
             "note": (f"scripted {task} on {embodiment}, one core (cpu_seconds_per_wall_second ~1: no other thread "
                      "worked; llvmpipe_threads 0 = software GL on the calling thread); shares and ms_per_frame are the run's time "
@@ -310,6 +312,44 @@ def _still_layer_comparison(replay_path: Path, profile) -> dict:
             "note": "every camera of every frame rendered both ways in turn (CPU time of this thread); "
                     "frames_per_cpu_second_whole_passes = this run's frames_per_cpu_second with the "
                     "camera time of whole passes instead (the code before the layers), and _speedup the ratio"}
+
+
+def _renderer_setup_comparison(task: str, embodiment: str, profile, rounds: int = 5) -> dict:
+    """A camera renderer's GL set-up, paid once per render file and per rollout: the render stage's way
+    (the thread's shared GL context, no shadow map without shadows) against the code before (a fresh GL
+    context per renderer and MuJoCo's default context with its shadow map), alternating; CPU time of the
+    process, so llvmpipe's own threads count too."""
+    import mujoco
+
+    from sim.offscreen import OffscreenRenderer, gl_context_class
+    from sim.render import apply_antialias, apply_tessellation
+
+    model = demonstration_scene(task, embodiment).model
+    apply_antialias(model, profile)
+    apply_tessellation(model, profile)
+
+    def before() -> None:
+        gl = gl_context_class()(profile.width, profile.height)
+        gl.make_current()
+        mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150).free()
+        gl.free()
+
+    ways = {"before": before,
+            "now": lambda: OffscreenRenderer(model, profile.width, profile.height, shadows=profile.shadows).close()}
+    ways["now"]()       # the thread's GL context, made once per process
+    cpu = dict.fromkeys(ways, 0.0)
+    for _ in range(rounds):
+        for name, make in ways.items():
+            c0 = time.process_time()
+            make()
+            cpu[name] += time.process_time() - c0
+    return {"cpu_ms_now": round(1e3 * cpu["now"] / rounds, 2),
+            "cpu_ms_before": round(1e3 * cpu["before"] / rounds, 2),
+            "speedup": round(cpu["before"] / max(cpu["now"], 1e-9), 2),
+            "note": f"{rounds} renderers made and closed each way, alternating; now = sim.offscreen "
+                    "(the thread's shared GL context, no shadow map unless the profile has shadows); before "
+                    "= a fresh GL context and MuJoCo's default context per renderer (its "
+                    f"{int(model.vis.quality.shadowsize)}-square shadow map made whether or not a scene asks)"}
 
 
 # Render parts that are the sensors' own work (everything else is overhead the factory adds).

@@ -48,17 +48,23 @@ Geom records are moved in the scene's own buffer (a numpy view checked against t
 views when the renderer is made; without a match the renderer draws every geom) and put back after
 each render, keeping their segmentation ids, so segment colours do not change.
 
-A renderer must free its GL objects with its own context current: `close()` does, and so does a
-renderer that is garbage-collected without it (a finalizer), which otherwise deleted the objects of
-whichever context was current - another renderer's, whose images then came out as noise.
+The renderers of a thread share one GL context (the first MuJoCo context in a fresh GL context costs
+llvmpipe ~200 ms of CPU, a later one ~3 ms); each keeps its own MuJoCo context and offscreen framebuffer,
+bound again whenever it renders. Without shadows a renderer's MuJoCo context has no shadow map (MuJoCo
+allocates a 4096-square one by default, ~45 ms). A renderer must free its GL objects with their GL context
+current: `close()` does, and so does a renderer that is garbage-collected without it (a finalizer), which
+once deleted the objects of whichever context was current - another renderer's, whose images then came
+out as noise.
 """
 
 from __future__ import annotations
 
 import ctypes
 import importlib
+import logging
 import math
 import os
+import threading
 import weakref
 from dataclasses import dataclass
 
@@ -67,6 +73,8 @@ import mujoco
 import numpy as np
 
 from sim.still_layers import Layer, ViewKey, merge_id_passes, still_cameras, welded_bodies
+
+log = logging.getLogger(__name__)
 
 _FLAGS = mujoco.mjtRndFlag
 _G = mujoco.mjtGeom
@@ -170,32 +178,72 @@ def _bounding_radii(geoms: np.ndarray) -> np.ndarray:
     return radius * 1.001 + 1e-3
 
 
-def _release(gl, con) -> None:
-    """Free an MjrContext's GL objects with its own context current (restoring whichever was current:
-    a finalizer may run in the middle of another renderer's work), then the context."""
+def _make_context(model: mujoco.MjModel, shadows: bool) -> mujoco.MjrContext:
+    """MuJoCo's GL resources for `model`. Without shadows the context gets no shadow map: MuJoCo
+    allocates one of `visual/quality/shadowsize` squared (4096 by default) for every context, ~45 ms of a
+    ~50 ms context in llvmpipe, and reads it only when a scene asks for shadows. The model is left as it was."""
+    size = int(model.vis.quality.shadowsize)
+    if not shadows:
+        model.vis.quality.shadowsize = 0
+    try:
+        return mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
+    finally:
+        model.vis.quality.shadowsize = size
+
+
+def _scene_capacity(model: mujoco.MjModel) -> int:
+    """Visual geoms a scene may hold: four per model element MuJoCo may draw (a b2d scene draws one per geom),
+    at least 1,000. mujoco.Renderer's 10,000 cost ~36 ms of every renderer's set-up to allocate."""
+    return max(1_000, 4 * (model.ngeom + model.nsite + model.ntendon + model.nflex + model.nskin))
+
+
+_THREAD_GL = threading.local()
+
+
+def _thread_gl_context(width: int, height: int):
+    """The GL context shared by the renderers of the calling thread, made by the first of them. Mesa's
+    llvmpipe spends ~200 ms of CPU on the first MuJoCo context in a fresh GL context and ~3 ms on each
+    later one, so a render file or rollout after the first no longer pays it. A GL context is current on
+    one thread at a time, hence one per thread; the process id guards against a forked copy. Renderers
+    draw into their own MuJoCo offscreen framebuffers, so the context's own surface size never matters."""
+    key = (os.getpid(), os.environ.get("MUJOCO_GL", "egl").lower())
+    if getattr(_THREAD_GL, "key", None) != key:
+        _THREAD_GL.context, _THREAD_GL.key = gl_context_class()(width, height), key
+    return _THREAD_GL.context
+
+
+def _release(gl, con, thread_id: int) -> None:
+    """Free an MjrContext's GL objects with its own GL context current (restoring whichever was current:
+    a finalizer may run in the middle of another renderer's work). The shared GL context is current on
+    its own thread, so a renderer collected on another thread leaves its objects to that context."""
+    if threading.get_ident() != thread_id:
+        log.warning("an OffscreenRenderer collected on another thread than its own: its GL objects are "
+                    "left until its thread's GL context ends (close() renderers on their own thread)")
+        return
     with gl.as_current():
         con.free()
-    gl.free()
 
 
 class OffscreenRenderer:
     """`still_layers` False renders every pass of every camera whole (the reference for the kept
     passes of the welded geoms; benchmarks compare both)."""
 
-    def __init__(self, model: mujoco.MjModel, width: int, height: int, max_geom: int = 10_000,
-                 still_layers: bool = True):
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, max_geom: int | None = None,
+                 still_layers: bool = True, shadows: bool = False):
         if width > model.vis.global_.offwidth or height > model.vis.global_.offheight:
             raise ValueError(f"image {width}x{height} exceeds the model's offscreen buffer "
                              f"{model.vis.global_.offwidth}x{model.vis.global_.offheight} (visual/global offwidth)")
         self.model, self.width, self.height = model, width, height
-        self._gl = gl_context_class()(width, height)
+        self._gl = _thread_gl_context(width, height)
         self._gl.make_current()
-        self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_150)
-        # frees the GL objects in this renderer's own context, from close() or when it is collected
-        self._finalizer = weakref.finalize(self, _release, self._gl, self._con)
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
+        self.shadows = shadows
+        self._con = _make_context(model, shadows)
+        # frees the GL objects in the context they were made in, from close() or when it is collected
+        self._finalizer = weakref.finalize(self, _release, self._gl, self._con, threading.get_ident())
+        self._make_current()
         self._con.readDepthMap = mujoco.mjtDepthMap.mjDEPTH_ZEROFAR
         self._rect = mujoco.MjrRect(0, 0, width, height)
+        max_geom = max_geom or _scene_capacity(model)
         self.scene = mujoco.MjvScene(model, maxgeom=max_geom)
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
@@ -219,11 +267,24 @@ class OffscreenRenderer:
         # (placement, welded geoms among the placed, pixels no moving geom owns, layer): see id_pass
         self._merged: tuple[int, np.ndarray, np.ndarray, Layer] | None = None
 
-    def update(self, data: mujoco.MjData, camera_id: int, shadows: bool = False) -> None:
-        """Place the scene's geoms for `data` as seen from a model camera."""
+    def _make_current(self) -> None:
+        """This renderer's GL context and its own offscreen framebuffer (another renderer of the thread
+        may have bound its own since)."""
+        self._gl.make_current()
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
+
+    def update(self, data: mujoco.MjData, camera_id: int, shadows: bool | None = None) -> None:
+        """Place the scene's geoms for `data` as seen from a model camera; shadows and reflections as
+        the renderer was made (`shadows`) unless turned off here."""
+        if shadows and not self.shadows:
+            raise ValueError("shadows: this renderer was made without a shadow map (OffscreenRenderer(shadows=True))")
+        shadows = self.shadows if shadows is None else shadows
         self._camera.fixedcamid = camera_id
         mujoco.mjv_updateScene(self.model, data, self._option, None, self._camera,
                                mujoco.mjtCatBit.mjCAT_ALL, self.scene)
+        if self.scene.ngeom >= self.scene.maxgeom:     # MuJoCo drops the rest with only a warning
+            raise RuntimeError(f"the scene's {self.scene.maxgeom} visual geoms are all used: some would not be "
+                               "drawn (pass a larger OffscreenRenderer(max_geom=...))")
         self.scene.flags[_FLAGS.mjRND_SHADOW] = shadows
         self.scene.flags[_FLAGS.mjRND_REFLECTION] = shadows
         self._placement += 1
@@ -233,7 +294,7 @@ class OffscreenRenderer:
 
     def color(self) -> np.ndarray:
         """HxWx3 uint8 image of the current scene."""
-        self._gl.make_current()
+        self._make_current()
         rgb = np.empty((self.height, self.width, 3), np.uint8)
         merged = self._merged if self._merged is not None and self._merged[0] == self._placement else None
         if merged is not None and self._colour_merge_holds():
@@ -297,7 +358,7 @@ class OffscreenRenderer:
         buffer and (if asked) segment colours, bottom row first; `decode` turns them into images.
         Rendered before `color()` of the same placement, it also tells that colour pass which geoms
         own a pixel."""
-        self._gl.make_current()
+        self._make_current()
         layer, welded = self._still_layer()        # before the flags change: they are part of its key
         flags = self.scene.flags
         saved = flags.copy()

@@ -59,7 +59,8 @@ class CameraRig:
         model.vis.map.zfar = profile.clip_far_m / max(model.stat.extent, 1e-6)
         apply_antialias(model, profile)
         apply_tessellation(model, profile)
-        self.renderer = OffscreenRenderer(model, profile.width, profile.height, still_layers=still_layers)
+        self.renderer = OffscreenRenderer(model, profile.width, profile.height, still_layers=still_layers,
+                                          shadows=profile.shadows)
         self.want_rgb = "rgb" in profile.modalities
         self.want_depth = "depth" in profile.modalities
         self.want_segments = segments
@@ -86,7 +87,7 @@ class CameraRig:
         clock = time.perf_counter
         for name, cid in self.camera_ids.items():
             t0 = clock()
-            self.renderer.update(data, cid, shadows=self.profile.shadows)
+            self.renderer.update(data, cid)
             out = {}
             t1 = clock()
             self.seconds["scene_update"] += t1 - t0

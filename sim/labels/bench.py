@@ -50,14 +50,14 @@ def run_bench(profile: str | SensorProfile = "paper", frames: int = 10, task: st
     clock = time.perf_counter
     apply_antialias(model, profile)     # as the render stage's camera rig
     apply_tessellation(model, profile)
-    renderer = OffscreenRenderer(model, profile.width, profile.height)
+    renderer = OffscreenRenderer(model, profile.width, profile.height, shadows=profile.shadows)
     try:
         for _ in range(frames):
             for _ in range(STEPS_BETWEEN_FRAMES):
                 physics.step_control(model, data, scene.layout.home_ctrl)
             for cam in profile.camera_ids:
                 marks = [clock()]
-                renderer.update(data, model.camera(cam).id, shadows=profile.shadows)
+                renderer.update(data, model.camera(cam).id)
                 marks.append(clock())
                 renderer.color()
                 marks.append(clock())
