@@ -11,7 +11,7 @@ containment test; any other mesh falls back to its convex hull.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cache, cached_property
 
 import mujoco
 import numpy as np
@@ -90,6 +90,13 @@ class MeshShape:
         return self.trimesh.contains(points)
 
 
+@cache
+def _unit_icosphere() -> trimesh.Trimesh:
+    """The unit sphere's surface mesh, built once per process (~14 ms each time; every render file's
+    labels sample the spheres and ellipsoids of its objects). Callers scale a copy."""
+    return trimesh.creation.icosphere(subdivisions=2)
+
+
 class GeomShapes:
     """Shape data of a model's geoms, with compiled meshes converted once."""
 
@@ -148,7 +155,7 @@ class GeomShapes:
         if kind == BOX:
             return trimesh.creation.box(extents=2.0 * s)
         if kind in (SPHERE, ELLIPSOID):
-            ball = trimesh.creation.icosphere(subdivisions=2)
+            ball = _unit_icosphere().copy()
             ball.apply_scale(s if kind == ELLIPSOID else np.full(3, s[0]))
             return ball
         if kind == CYLINDER:

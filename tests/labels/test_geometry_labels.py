@@ -191,3 +191,21 @@ def test_geometry_labels_are_deterministic():
         runs.append([grid.semantic, grid.instance, boxes.center_world, boxes.size_lwh, boxes.quat_world])
     for a, b in zip(*runs):
         assert a.tobytes() == b.tobytes()
+
+
+def test_sphere_and_ellipsoid_surfaces_are_the_icosphere_scaled_every_time():
+    """Surface meshes (what 2D boxes sample) start from one cached unit icosphere: asked again, and for
+    another size, each is still the unit icosphere scaled to its own geom."""
+    spec = new_spec()
+    add_free_body(spec, "balls", (0, 0, 0.5), [
+        {"type": G.mjGEOM_SPHERE, "size": [0.02, 0, 0]},
+        {"type": G.mjGEOM_ELLIPSOID, "size": [0.03, 0.01, 0.02], "pos": [0.1, 0, 0]},
+    ])
+    model = spec.compile()
+    shapes = GeomShapes(model)
+    for _ in range(2):
+        for g, scale in ((model.geom("balls/0").id, [0.02] * 3), (model.geom("balls/1").id, [0.03, 0.01, 0.02])):
+            want = trimesh.creation.icosphere(subdivisions=2)
+            want.apply_scale(scale)
+            got = shapes.surface(g)
+            assert np.array_equal(got.vertices, want.vertices) and np.array_equal(got.faces, want.faces)
