@@ -35,6 +35,7 @@ def parallel_render_figures(replay_path: Path, profile, workers: int, out_dir: P
             helper_cpu = info["helper_cpu_s"]
             runs[n].append({"wall_s": round(wall, 3), "writer_cpu_s": round(own_cpu, 3),
                             "helpers_cpu_s": round(helper_cpu, 3), "cpu_s": round(own_cpu + helper_cpu, 3),
+                            "setup_cpu_s": round(info["setup_cpu_s"], 3),     # every process's, once per file
                             "workers": info["workers"], "load_average_1min": round(load, 2),
                             # on idle cores the busiest process sets the wall time
                             "critical_path_cpu_s": round(max(own_cpu, helper_cpu / max(1, info["workers"] - 1)), 3)})
