@@ -17,8 +17,8 @@ from sim.errors import SpecError
 from sim.schema.base import validate
 # the plan's vocabulary, used by the planners (teleop/plan_steps/)
 from sim.schema.demo_plan import (BOTH_HANDS, DRAG_HOOK_DEPTH_M, DRAG_PITCH_DEG, GRASP_YAW_ACROSS,  # noqa: F401
-                                  PLACE_FROM_FRONT, POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, STEP_MODELS,
-                                  TABLE_TARGET)
+                                  PLACE_FROM_FRONT, POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, SIDE_GRASP,
+                                  STEP_MODELS, TABLE_TARGET)
 
 PLAN_STEP = " or ".join(
     "{" + ", ".join([*(f for f, info in model.model_fields.items() if info.is_required()), "..."]) + "}"

@@ -24,7 +24,8 @@ TABLE_TARGET = "table"      # place: table puts an object down at place_offset [
 HANDS = ("left", "right")
 BOTH_HANDS = "both"         # `hand: both`: a step of both hands at once (carry)
 PLAN_GRASPS = ("power", "pinch")
-PICK_GRASPS = (*PLAN_GRASPS, "flat_pinch")   # flat_pinch: the fingertips to the table beside a thin object lying flat
+SIDE_GRASP = "side"         # the hand's palm grasp turned to the side, thumb up: a tall object (a bottle, a drill's grip)
+PICK_GRASPS = (*PLAN_GRASPS, "flat_pinch", SIDE_GRASP)   # flat_pinch: the fingertips to the table beside a thin object lying flat
 GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
 PLACE_FROM_FRONT = "front"
 PLACE_FROM = ("above", PLACE_FROM_FRONT)   # lowered from above, or slid in through a side opening
@@ -32,10 +33,13 @@ WAIT_RANGE_S = (0.0, 60.0)
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 DRAG_HOOK_DEPTH_M = 0.02    # drag: curled fingertips this far below the container's rim
 DRAG_PITCH_DEG = 20.0       # ... the fingers tilted this far down into it
+DRAG_HOOK, DRAG_PALM = "hook", "palm"   # drag's contact: fingers hooked inside its wall, or pushing it from behind
+DRAG_CONTACTS = (DRAG_HOOK, DRAG_PALM)
 POUR_TILT_RANGE_DEG = (50.0, 150.0)   # mouth axis from vertical: a pour threshold .. near upside down
 POUR_DEFAULT_TILT_DEG = 85.0          # a person's pour: the bottle near horizontal, well past 50
-POUR_GRASPS = ("side", *PLAN_GRASPS)  # side: palm against a tall bottle, thumb up (a person's hold)
-POUR_DEFAULT_GRASP = "side"
+SIDE_ROLL_RANGE_DEG = (60.0, 135.0)   # grasp_roll_deg of a side grasp: 90 thumb up, more: the palm turned partly up
+POUR_GRASPS = (SIDE_GRASP, *PLAN_GRASPS)  # side: palm against a tall bottle, thumb up (a person's hold)
+POUR_DEFAULT_GRASP = SIDE_GRASP
 TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
 
 
@@ -165,12 +169,14 @@ class GraspFields(CatalogModel):
 
 class PickStep(PlanStep, GraspFields):
     """{hand, pick, place, [place_offset], [place_from], [grasp], [approach_pitch_deg], [grasp_yaw],
-    [grasp_point], [after], [wait_s]}: carry an object onto or into `place` (an object, or `table` with
-    place_offset the spot on the table top). place_from: front slides it in level through the side a
+    [grasp_point], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
+    or `table` with place_offset the spot on the table top). place_from: front slides it in level through the side a
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
     object's frame; grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
-    its centre or of grasp_point (a spatula's handle clear of its blade)."""
+    its centre or of grasp_point (a spatula's handle clear of its blade); grasp: side is the palm grasp
+    from the side, thumb up, around an upright part (a drill's grip under its motor, a bottle), turned
+    grasp_roll_deg about the fingers (default 90: thumb up)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -179,6 +185,15 @@ class PickStep(PlanStep, GraspFields):
     place_from: Name = "above"              # before `place`, which it constrains
     place: Name
     place_offset: PlaceOffset = None
+    grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
+                                   description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
+
+    @field_validator("grasp_roll_deg", mode="before")
+    @classmethod
+    def _side_only(cls, roll: float, info: ValidationInfo) -> float:
+        if info.data.get("grasp") != SIDE_GRASP:
+            raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
+        return roll
 
     @field_validator("place_from", mode="before")
     @classmethod
@@ -195,14 +210,17 @@ class PickStep(PlanStep, GraspFields):
 
 
 class DragStep(PlanStep):
-    """{hand, drag, to_zone, [place_offset], [hook_depth], [pitch_deg], [hook_closure], [after], [wait_s]}:
-    pull a container across the table until its centre is at place_offset [dx, dy] from the zone's
-    centre, the curled fingertips hook_depth below its rim, the fingers pitch_deg down and curled
-    hook_closure of the wall hook (a tall box tips when full curl lifts its wall: pull low, barely curled)."""
+    """{hand, drag, to_zone, [place_offset], [contact], [hook_depth], [pitch_deg], [hook_closure], [after],
+    [wait_s]}: pull a container across the table until its centre is at place_offset [dx, dy] from the
+    zone's centre, the curled fingertips hook_depth below its rim, the fingers pitch_deg down and curled
+    hook_closure of the wall hook (a tall box tips when full curl lifts its wall: pull low, barely curled).
+    contact: palm instead pushes it from behind with the flat hand on its edge, thumb up, just above the
+    table (a mug slid under a tap: too narrow for curled fingers, and nothing of the hand above it)."""
 
     drag: Name
     to_zone: Name
     place_offset: ZoneOffset = None
+    contact: Name = DRAG_HOOK               # before the hook's fields, which it rules out
     hook_depth: Number = DRAG_HOOK_DEPTH_M
     pitch_deg: Number = Field(DRAG_PITCH_DEG, ge=0.0, le=80.0, description="degrees in [0, 80]")
     hook_closure: Number = Field(1.0, gt=0.0, le=1.0, description="a fraction of the wall hook's curl in (0, 1]")
@@ -218,6 +236,18 @@ class DragStep(PlanStep):
     def _a_zone(cls, zone: str, info: ValidationInfo) -> str:
         zones = sorted(_scope(info).zones)
         return _one_of(zone, zones, f"a zone from {zones}")
+
+    @field_validator("contact", mode="before")
+    @classmethod
+    def _a_contact(cls, contact: str) -> str:
+        return _one_of(contact, DRAG_CONTACTS, f"one of {list(DRAG_CONTACTS)}")
+
+    @field_validator("hook_depth", "pitch_deg", "hook_closure", mode="before")
+    @classmethod
+    def _only_with_a_hook(cls, value, info: ValidationInfo):
+        if info.data.get("contact") == DRAG_PALM:
+            raise ValueError(f"no {info.field_name} with contact: {DRAG_PALM} (the fingers push, not hook)")
+        return value
 
     @field_validator("hook_depth", mode="before")
     @classmethod
@@ -355,22 +385,33 @@ class StrikeStep(PlanStep, GraspFields):
 
 
 class CarryStep(PlanStep):
-    """{hand: both, carry, place, [place_offset], [grasp_height], [return_home], [after], [wait_s]}: both
-    palms squeeze the object from opposite sides and carry it onto/into `place` (place_offset as for
-    pick); grasp_height (metres from its centre, within its half height) is where the palms press;
-    return_home: true sends both hands back to their home pose after letting go."""
+    """{hand: both, carry, place, [place_from], [place_offset], [grasp_height], [return_home], [after],
+    [wait_s]}: both palms squeeze the object from opposite sides and carry it onto/into `place`
+    (place_from and place_offset as for pick: with place_from: front it is slid in level through the
+    side a container is open at, a bowl into a microwave); grasp_height (metres from its centre, within
+    its half height) is where the palms press; return_home: true sends both hands back to their home
+    pose after letting go."""
 
     hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
 
     carry: TaskObject
+    place_from: Name = "above"              # before `place`, which it constrains
     place: Name
     place_offset: PlaceOffset = None
     grasp_height: Number = 0.0
     return_home: Bool = False
 
+    @field_validator("place_from", mode="before")
+    @classmethod
+    def _a_way_in(cls, place_from: str) -> str:
+        return _one_of(place_from, PLACE_FROM, f"one of {list(PLACE_FROM)}")
+
     @field_validator("place", mode="before")
     @classmethod
     def _a_place(cls, place: str, info: ValidationInfo) -> str:
+        if info.data.get("place_from") == PLACE_FROM_FRONT:
+            containers = [c for c in _containers(_scope(info)) if c != info.data.get("carry")]
+            return _one_of(place, containers, f"with place_from: front, a container from {containers}")
         return _object(place, info, but=(info.data.get("carry"),))
 
     @field_validator("grasp_height", mode="before")

@@ -11,6 +11,8 @@ The opening is found by rays from the cavity's centre against the container's ow
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import mujoco
 import numpy as np
 
@@ -51,6 +53,38 @@ def opening(model: mujoco.MjModel, data: mujoco.MjData, body: int, centre: np.nd
     return max(free, key=lambda d: float(d @ (towards - centre)))
 
 
+class SideOpening(NamedTuple):
+    """A container's side opening (world): ``out`` the unit direction out of it (horizontal), ``mouth``
+    a point of its plane, the cavity's ``centre``, ``floor`` and ``ceiling`` heights."""
+
+    out: np.ndarray
+    mouth: np.ndarray
+    centre: np.ndarray
+    floor: float
+    ceiling: float
+
+
+def side_opening(op: PlanningOperator, data: mujoco.MjData, container: str, towards: np.ndarray) -> SideOpening:
+    """The side ``container`` is open at (of several, the one facing ``towards``) and its cavity."""
+    target = op.scene.task.objects[container]
+    body = op.scene.object_body_ids[container]
+    R = data.xmat[body].reshape(3, 3)
+    centre = data.xpos[body] + R @ np.asarray(target.interior_offset, float)
+    out = opening(op.scene.model, data, body, centre, towards, op.scene.task.source)
+    half = np.asarray(target.interior_half_extents, float)
+    mouth = centre + float(np.abs(R.T @ out) @ half) * out
+    height = float(np.abs(R[2]) @ half)
+    return SideOpening(out, mouth, centre, float(centre[2]) - height, float(centre[2]) + height)
+
+
+def front_release(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, way_in: SideOpening) -> np.ndarray:
+    """Where the centre of object ``name`` is let go in the step's `place`: `place_offset` [dx, dy] from
+    the container's centre, the release gap above [dz above] the cavity floor."""
+    dx, dy, dz = [*item.get("place_offset", [0.0, 0.0]), 0.0][:3]
+    return np.array([*(op.object_pos(data, item["place"])[:2] + [dx, dy]),
+                     way_in.floor + dz + op.scene.task.objects[name].rest_height + RELEASE_GAP_M])
+
+
 def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
                           offset: np.ndarray) -> None:
     """The held object ``name`` (its centre ``offset`` from the wrist, world) carried from where the hand
@@ -58,18 +92,10 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     centre (dz: above the cavity floor), lowered, let go; the hand drawn back out and home."""
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
-    model, task = op.scene.model, op.scene.task
-    target, obj = task.objects[item["place"]], task.objects[name]
-    body = op.scene.object_body_ids[item["place"]]
-    R = data.xmat[body].reshape(3, 3)
-    centre = data.xpos[body] + R @ np.asarray(target.interior_offset, float)
-    out = opening(model, data, body, centre, side["home"][0], task.source)
-    half = np.asarray(target.interior_half_extents, float)
-    floor = float(centre[2] - np.abs(R[2]) @ half)          # the cavity floor's height (world)
-    mouth = centre + float(np.abs(R.T @ out) @ half) * out   # a point of the opening's plane
-    dx, dy, dz = [*item.get("place_offset", [0.0, 0.0]), 0.0][:3]
-    place = np.array([*(op.object_pos(data, item["place"])[:2] + [dx, dy]),
-                      floor + dz + obj.rest_height + RELEASE_GAP_M]) - offset      # wrist, letting go
+    model = op.scene.model
+    way_in = side_opening(op, data, item["place"], side["home"][0])
+    out, mouth = way_in.out, way_in.mouth
+    place = front_release(op, data, item, name, way_in) - offset      # wrist, letting go
     op.leaves(name, place + offset - RELEASE_GAP_M * UP, on=item["place"])
     # how far ahead of the wrist (into the opening) the open or closed hand and the object reach
     body_pts = bounding_box_points(model, data, op.scene.object_body_ids[name]) - op.object_pos(data, name) + offset
@@ -80,8 +106,7 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     # let go, the open hand rises until its lowest point clears the object's top (the fingers hooked
     # round a bowl's rim drag it back out otherwise), as far as the cavity's ceiling lets it
     open_pts = hand_outline(side["hand"], item["hand"], side["open"]) @ R_hand.reshape(3, 3).T
-    ceiling = float(centre[2] + np.abs(R[2]) @ half)
-    room = ceiling - CEILING_GAP_M - float(place[2] + max(open_pts[:, 2].max(), hand_pts[:, 2].max()))
+    room = way_in.ceiling - CEILING_GAP_M - float(place[2] + max(open_pts[:, 2].max(), hand_pts[:, 2].max()))
     rise = max(WITHDRAW_RISE_M, min(float(body_pts[:, 2].max() + OFF_TOP_M - open_pts[:, 2].min()), room))
     back = max(0.0, float((place - mouth) @ -out) + lead + OUTSIDE_M)
     slide = place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP

@@ -4,7 +4,8 @@ Approach, descend, close, lift, carry, lower, open, retreat; palm down, or with 
 down (`approach_pitch_deg`), turned about the vertical (`grasp_yaw`). Where the object sits in the
 hand and how the hand closes come from the hand file's palm grasp (at the object's `grasp_point`), or,
 with `grasp: pinch`, from a pinch found from the hand's kinematics (teleop/pinch_grasp.py), or with
-`grasp: flat_pinch`, from the fingertips' pinch for thin objects lying flat (teleop/flat_pinch.py).
+`grasp: flat_pinch`, from the fingertips' pinch for thin objects lying flat (teleop/flat_pinch.py),
+or with `grasp: side`, the palm grasp turned thumb up around an upright part (a drill's grip).
 Where the object goes comes from `place_offset`.
 """
 
@@ -15,7 +16,7 @@ import functools
 import mujoco
 import numpy as np
 
-from sim.demo_plan import GRASP_YAW_ACROSS, PLACE_FROM_FRONT, TABLE_TARGET
+from sim.demo_plan import GRASP_YAW_ACROSS, PLACE_FROM_FRONT, SIDE_GRASP, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
@@ -37,6 +38,8 @@ WALL, CLOSED = (1.0, 0.0), (1.0, 1.0)
 PINCH_SPREAD_MARGIN_M = 0.025  # pinch pre-shape: pads this much wider apart than the object
 RELEASE_GAP_M = 0.005         # lowered to just above the plate: fruit let go higher bounces and rolls
 PALM_CLEARANCE_M = 0.004
+SIDE_GRASP_ROLL_DEG = 90.0    # `grasp: side`: the right hand turned palm towards the body's midline, thumb up
+SIDE_GRASP_IN_M = 0.05        # `grasp: side` comes down this far out from the object, then moves in level
 CARRY_CLEARANCE_M = 0.02      # the carried object's bottom above its target's top, moving across
 
 
@@ -69,8 +72,9 @@ def grasp_kind(item: dict) -> str:
     """A plan step's `grasp`: "power" (the hand's palm grasp, default), "pinch" (thumb against the
     first fingers' pads, for objects too small for the palm; teleop/pinch_grasp.py) or "flat_pinch"
     (the fingertips' pinch for a thin object lying flat: they come down to the table beside it;
-    teleop/flat_pinch.py). With flat_pinch, `grasp_yaw` in degrees is the direction the tips close
-    along (world, from +x); "across" or none: across the object's narrowest horizontal width."""
+    teleop/flat_pinch.py) or "side" (the palm grasp turned thumb up: side_roll). With flat_pinch,
+    `grasp_yaw` in degrees is the direction the tips close along (world, from +x); "across" or none:
+    across the object's narrowest horizontal width."""
     return item.get("grasp", "power")
 
 
@@ -127,6 +131,17 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     return hand_rot, ready, offset, closing
 
 
+def side_roll(item: dict) -> float:
+    """The turn (degrees, about the fingers) of a `grasp: side`: palm towards the body's midline,
+    thumb up, as a person takes a drill by its grip or a bottle by its body; `grasp_roll_deg` past 90
+    turns the palm partly up (the thumb leans out, clear of a part above the grip, and the held object
+    settles onto the palm); 0 for the other grasps."""
+    if item.get("grasp") != SIDE_GRASP:
+        return 0.0
+    roll = float(item.get("grasp_roll_deg", SIDE_GRASP_ROLL_DEG))
+    return roll * (1.0 if item["hand"] == "right" else -1.0)
+
+
 def grasp_point(item: dict) -> np.ndarray:
     """A plan step's `grasp_point` [x, y, z] (object frame, metres): where the hand closes, for an
     object held by a part (a pan by its handle); default its centre. Power grasps, and pinches (the pads
@@ -163,11 +178,13 @@ def across_turn(closing: np.ndarray, body_rot: np.ndarray, half_extents) -> floa
 
 
 def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
-                   roll_deg: float = 0.0) -> np.ndarray:
+                   roll_deg: float = 0.0, side_in_m: float = 0.0) -> np.ndarray:
     """Append the hand's approach to object ``name``, descent, closing and lift (the step's `grasp`
     and `approach_pitch_deg`; ``roll_deg`` turns the hand about the fingers first, e.g. 90: a tall
-    bottle held from the side, thumb up); return the object centre's offset from the wrist site
-    (world) as held."""
+    bottle held from the side, thumb up); ``side_in_m``: the hand comes down that far out along its
+    palm's normal, from above the object's top, and moves in level (a part above the grasped one, a
+    drill's motor over its grip, stays clear of the open fingers) until the palm is just short of the
+    part at the grasp point; return the object centre's offset from the wrist site (world) as held."""
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     obj = op.scene.task.objects[name]
@@ -206,14 +223,25 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         at = body_rot @ grasp_point(item)
         # the palm clears the object's top, measured from the grasped point rather than its centre
         # the hand closes on the grasp point; the object's centre sits `at` back from it
-        offset = hand_rot @ np.array([cx, max(cy, half_z - at[2] + PALM_CLEARANCE_M), cz]) - at
+        clear = half_z - at[2] + PALM_CLEARANCE_M
+        if side_in_m:       # moved in level: the palm stops just short of the part at the grasp point
+            clear = 0.5 * part_width(op.scene.model, data, op.scene.object_body_ids[name],
+                                     op.object_pos(data, name) + at, hand_rot[:, 1]) + PALM_CLEARANCE_M
+        offset = hand_rot @ np.array([cx, max(cy, clear), cz]) - at
         closing = [(DURATIONS["close"], op.power(side, WALL), None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
         ready = open_
     hand_quat = quat(hand_rot)
     grasp = op.object_pos(data, name) - offset
     reach = len(tl.frames)
-    op.set_off(side, data, item, DURATIONS["approach"], pos=grasp + APPROACH_HEIGHT_M * UP, quat=hand_quat, hand=ready)
-    tl.add(DURATIONS["descend"], pos=grasp)
+    beside = grasp - side_in_m * (hand_rot @ PALM_DOWN.T @ -UP)     # out from the object, along the palm's normal
+    above = APPROACH_HEIGHT_M
+    if side_in_m:       # the hand on its side reaches down as far as across: it comes from above the object's top
+        top = float(bounding_box_points(op.scene.model, data, op.scene.object_body_ids[name])[:, 2].max())
+        above += max(0.0, top - grasp[2])
+    op.set_off(side, data, item, DURATIONS["approach"], pos=beside + above * UP, quat=hand_quat, hand=ready)
+    tl.add(DURATIONS["descend"], pos=beside)
+    if side_in_m:
+        tl.add(DURATIONS["descend"], pos=grasp)
     for duration, targets, wrist_z in closing:
         if wrist_z is None:
             tl.add(duration, hand=targets)
@@ -248,11 +276,12 @@ def rest_centre(release: np.ndarray) -> np.ndarray:
 
 
 def lower_and_release(op: PlanningOperator, item: dict, name: str, offset: np.ndarray, place: np.ndarray,
-                      rise_to: float = -np.inf) -> None:
+                      rise_to: float = -np.inf, out: np.ndarray | None = None) -> None:
     """From above ``place`` (the wrist position that lets object ``name`` go where it belongs):
-    lower, open, retreat, then on up to wrist height ``rise_to``; before lowering, the operator
-    corrects the lower, open and retreat keyframes for how the object has slipped. The rise stays
-    where the plan put it: corrected too, frypan_stand_pour fell from 10 to 7/12."""
+    lower, open, (``out``: first move the open hand by that much, level: a side grasp's fingers
+    out from under the part above them), retreat, then on up to wrist height ``rise_to``; before
+    lowering, the operator corrects the lower, open and retreat keyframes for how the object has
+    slipped. The rise stays where the plan put it: corrected too, frypan_stand_pour fell from 10 to 7/12."""
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     # above the target the operator looks where the object really sits in the hand (it may
@@ -260,6 +289,9 @@ def lower_and_release(op: PlanningOperator, item: dict, name: str, offset: np.nd
     first = len(tl.frames)
     tl.add(DURATIONS["lower"], pos=place)
     tl.add(DURATIONS["open"], hand=side["open"])
+    if out is not None:
+        place = place + out
+        tl.add(DURATIONS["retreat"], pos=place)
     tl.add(DURATIONS["retreat"], pos=place + APPROACH_HEIGHT_M * UP)
     carried_at = tl.frames[first - 1].end_step
     side["corrections"].append((carried_at, name, offset, slice(first, len(tl.frames))))
@@ -291,7 +323,12 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
     carry_frame = len(tl.frames)
     op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
     lower_frame = len(tl.frames)
-    lower_and_release(op, item, name, offset, place)
+    out = None
+    if side_roll(item):     # the way the hand came in, back out: along its palm's normal
+        held = np.zeros(9)
+        mujoco.mju_quat2Mat(held, tl.frames[-1].quat)
+        out = -SIDE_GRASP_IN_M * (held.reshape(3, 3) @ PALM_DOWN.T @ -UP)
+    lower_and_release(op, item, name, offset, place, out=out)
     if grasp_kind(item) == "flat_pinch":      # looks at it in the hand, squares it, eases the tips apart
         ready = flat_pinch(op, data, item, name)[1]      # the pre-shape it came down with (same data: same plan)
         flat_place(op, data, item, name, offset, carry_frame, lower_frame, ready)
@@ -300,7 +337,8 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
 
 
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
-    offset = grasp_and_lift(op, data, item, item["pick"])
+    roll = side_roll(item)
+    offset = grasp_and_lift(op, data, item, item["pick"], roll_deg=roll, side_in_m=SIDE_GRASP_IN_M if roll else 0.0)
     if item.get("place_from") == PLACE_FROM_FRONT:      # slid in through a side opening (front_place.py)
         carry_and_place_front(op, data, item, item["pick"], offset)
     else:

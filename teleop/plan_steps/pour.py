@@ -20,11 +20,12 @@ import mujoco
 import numpy as np
 
 from evaluation.geometry import axis_extent
-from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, TABLE_TARGET
+from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, SIDE_GRASP, TABLE_TARGET
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.operator import PlanningOperator
-from teleop.plan_steps.pick_place import grasp_and_lift, lower_and_release, place_centre, rest_centre
+from teleop.plan_steps.pick_place import (SIDE_GRASP_ROLL_DEG, grasp_and_lift, lower_and_release, place_centre,
+                                         rest_centre)
 from teleop.transit import CLEARANCE_M, hand_outline
 
 
@@ -34,7 +35,6 @@ MOUTH_ABOVE_RIM_M = 0.05      # the tipped mouth this high above the target's to
 BOTTOM_ABOVE_RIM_M = 0.04     # carried upright over the target, the pourer's bottom clears its top by this
 RIM_INSET_M = 0.03            # the aim stays this far inside a container's cavity walls
 TILT_STEP_DEG = 1.0           # resolution of the turn that reaches the wanted tilt
-SIDE_GRASP_ROLL_DEG = 90.0    # `grasp: side`: the right hand palm towards the body's midline, thumb up
 POUR_DURATIONS = {"to_target": 70, "tilt": 70, "pour": 70, "untilt": 70, "back": 120}
 
 
@@ -109,7 +109,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     start = op.object_pos(data, name)
     obj_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).copy()
     grasp = item.get("grasp", POUR_DEFAULT_GRASP)
-    roll = 0.0 if grasp != "side" else SIDE_GRASP_ROLL_DEG * (1.0 if item["hand"] == "right" else -1.0)
+    roll = 0.0 if grasp != SIDE_GRASP else SIDE_GRASP_ROLL_DEG * (1.0 if item["hand"] == "right" else -1.0)
     offset = grasp_and_lift(op, data, item, name, roll_deg=roll)     # object centre from the wrist, as held
     hand_rot = np.zeros(9)
     mujoco.mju_quat2Mat(hand_rot, tl.frames[-1].quat)

@@ -63,9 +63,10 @@ def test_both_hands_start_together_and_squeeze_from_opposite_sides():
     scene, data, op = _operator([{"hand": "right", "pick": "soap", "place": "table", "place_offset": [0.3, -0.2]},
                                  STEP])
     right, left = ([f.end_step for f in op.sides[s]["timeline"].frames] for s in ("right", "left"))
-    # the carry's 11 frames and the hold before them (the return home is the last frame)
-    assert right[-13:-1] == left[-13:-1]
-    assert left[:2] == [STAGGER_STEPS, right[-13]]        # the left held still until the right's pick ended
+    # the carry's 11 frames, both hands' way home before them (the pick left the right hand at the table
+    # spot) and the hold before that (the return home is the last frame)
+    assert right[-14:-1] == left[-14:-1]
+    assert left[:2] == [STAGGER_STEPS, right[-14]]        # the left held still until the right's pick ended
     cleaner = op.object_pos(data, "cleaner")
     squeezed = {s: op.sides[s]["timeline"].frames[-10] for s in ("right", "left")}   # approach, descend, squeeze
     normals = {}
