@@ -8,9 +8,8 @@ import numpy as np
 import pytest
 
 from sim.demo_plan import PlanScope, parse_plan
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
+from sim.scene.sample import demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import OPERATORS
 from teleop.flat_pinch import tip_axis
@@ -48,8 +47,7 @@ def _op(steps, seed=0):
     spec = load_task(TASK)
     plan = parse_plan("t.yaml", {"demo_plan": steps}, PlanScope(spec.objects, spec.zones, spec.points))
     spec = dataclasses.replace(spec, demo_plan=plan)       # not load_task's cached one
-    seed = task_seed(names("tasks").index(TASK), seed)
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, seed))
+    scene = demonstration_scene(spec, EMBODIMENT, seed)
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)
@@ -89,9 +87,8 @@ def test_a_jigsaw_piece_is_set_square_beside_the_fixed_one():
     spec = load_task(TASK)
     plan = parse_plan("t.yaml", {"demo_plan": [GREEN]}, PlanScope(spec.objects, spec.zones, spec.points))
     spec = dataclasses.replace(spec, demo_plan=plan)
-    seed = task_seed(names("tasks").index(TASK), SEED)
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, seed))
-    rec = record_episode(scene, OPERATORS["stream"](), f"{SEED:04d}", seed)
+    scene = demonstration_scene(spec, EMBODIMENT, SEED)
+    rec = record_episode(scene, OPERATORS["stream"](), f"{SEED:04d}", demonstration_seed(TASK, SEED))
     record = rec.extra["episode_record"]
     assert record["stage_final"][rec.stage_ids.index("green_placed")], record["stage_final"]
     assert not record["drop"] and not record["high_speed"]

@@ -9,9 +9,8 @@ import pytest
 
 from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
-from sim.registry import names
-from sim.scene.builder import build_scene, demonstration_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
+from sim.scene.sample import demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import OPERATORS
 from teleop.plan_steps.carry import HOME_APART_M
@@ -74,9 +73,8 @@ def test_the_task_plan_loads_the_cleaner_and_then_the_soap():
     return_home (b2d bench demos measures all 12)."""
     spec = load_task(TASK)
     assert spec.demo_plan[0].get("return_home") is True
-    seed = task_seed(names("tasks").index(TASK), SOAP_SEED)
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, seed))
-    rec = record_episode(scene, OPERATORS["stream"](), f"{SOAP_SEED:04d}", seed)
+    scene = demonstration_scene(spec, EMBODIMENT, SOAP_SEED)
+    rec = record_episode(scene, OPERATORS["stream"](), f"{SOAP_SEED:04d}", demonstration_seed(TASK, SOAP_SEED))
     record = rec.extra["episode_record"]
     assert rec.success, f"final stages {record['stage_final']}, drop {record['drop']}"
     assert not record["drop"] and not record["high_speed"]

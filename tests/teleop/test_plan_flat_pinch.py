@@ -7,9 +7,7 @@ import yaml
 
 from sim import physics
 from sim.errors import SpecError
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 from teleop.flat_pinch import flat_pinch_rotation, tip_pinch, tip_points, tip_preshape
 from teleop.pinch_grasp import MEET_M, hand_kinematics
@@ -59,7 +57,7 @@ def test_flat_pinch_lifts_a_jigsaw_piece():
     """A 10 x 10 x 1.6 cm piece lying flat, lifted clear of the table (direct joint path, seed 0)."""
     spec = load_task(TASK)
     spec = type(spec)(**{**spec.__dict__, "demo_plan": [dict(PICK)]})
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(spec, EMBODIMENT)
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)
@@ -77,7 +75,7 @@ def test_a_flat_pinch_closes_either_side_of_its_grasp_point():
     plan shifts by the point, turned with the object, and the hand keeps its turn."""
     from teleop.plan_steps.pick_place import flat_pinch
     spec = load_task(TASK)
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(spec, EMBODIMENT)
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)

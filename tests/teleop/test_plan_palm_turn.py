@@ -11,9 +11,7 @@ import yaml
 
 from sim.errors import SpecError
 from sim.physics import CONTROL_HZ
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 from sim import physics
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS
@@ -78,7 +76,7 @@ def test_palm_turns_from_its_angle_on_either_way():
 
 def _planned(raw, tmp_path):
     task = parse_task(raw, tmp_path / "toilet.yaml")
-    scene = build_scene(task, EMBODIMENT, demonstration_sample(task, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(task, EMBODIMENT)
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)
@@ -113,7 +111,7 @@ def _lid_after(raw, tmp_path, lid_start: float | None = None) -> float:
     """The lid's angle once the scripted operator has played ``raw``'s plan through the stream interface
     (what recordings use), from the lid at ``lid_start`` (None: shut, as the scene starts)."""
     task = parse_task(raw, tmp_path / "toilet.yaml")
-    scene = build_scene(task, EMBODIMENT, demonstration_sample(task, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(task, EMBODIMENT)
     data = home(scene)
     adr = scene.joint_qpos_adr[LID]
     if lid_start is not None:
