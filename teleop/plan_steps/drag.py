@@ -42,6 +42,15 @@ PUSH_SPEED_M_PER_STEP = 0.0015  # 0.09 m/s: a round container pushed briskly tur
 RAY_BACKOFF_M = 0.5           # the ray finding the wall's outside starts this far behind the container
 
 
+def _way(op: PlanningOperator, item: dict, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    """A container's spot in the step's zone (place_offset from the zone's centre), the level unit
+    direction from its centre there, and the distance."""
+    goal = zone_centre(op.scene.task.zones[item["to_zone"]]) + np.asarray(item.get("place_offset", (0.0, 0.0)))
+    way = goal - centre[:2]
+    distance = float(np.linalg.norm(way))
+    return goal, np.array([*(way / max(distance, 1e-12)), 0.0]), distance
+
+
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     if item.get("contact") == DRAG_PALM:
         return push(op, data, item)
@@ -50,12 +59,9 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     obj = op.scene.task.objects[item["drag"]]
     body = op.scene.object_body_ids[item["drag"]]
     centre = data.xpos[body].copy()
-    goal = zone_centre(op.scene.task.zones[item["to_zone"]]) + np.asarray(item.get("place_offset", (0.0, 0.0)))
-    way = goal - centre[:2]
-    distance = float(np.linalg.norm(way))
+    _, d, distance = _way(op, item, centre)
     if distance < 1e-6:
         return
-    d = np.array([*(way / distance), 0.0])
     # fingers point at -d: PALM_DOWN's fingers (+y) turned about z
     hand_rot = yawed(pitched_palm_down(item.get("pitch_deg", DRAG_PITCH_DEG)), np.arctan2(-d[1], -d[0]) - np.pi / 2)
     hooked = op.power(side, np.multiply(WALL, item.get("hook_closure", 1.0)))   # 1: the full wall hook
@@ -87,12 +93,9 @@ def push(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     name = item["drag"]
     body = op.scene.object_body_ids[name]
     centre = op.planned_place(data, name, tl.end)[0]     # where an earlier step (an earlier push) leaves it
-    goal = zone_centre(op.scene.task.zones[item["to_zone"]]) + np.asarray(item.get("place_offset", (0.0, 0.0)))
-    way = goal - centre[:2]
-    distance = float(np.linalg.norm(way))
+    goal, d, distance = _way(op, item, centre)
     if distance < 1e-6:
         return
-    d = np.array([*(way / distance), 0.0])
     R = push_frame(side, item["hand"], d)
     outline = hand_outline(side["hand"], item["hand"], side["open"]) @ R.T      # world-aligned, from the site
     low = float(outline[:, 2].min())

@@ -3,7 +3,6 @@ hand's kinematics, and a real lift of a 1.6 cm jigsaw piece off the table."""
 
 import numpy as np
 import pytest
-import yaml
 
 from sim import physics
 from sim.errors import SpecError
@@ -15,15 +14,15 @@ from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import hand_outline
 
+from task_files import task_file_with_plan
+
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 PICK = {"hand": "right", "pick": "green_piece", "place": "table", "place_offset": [0.105, 0.12],
         "grasp": "flat_pinch", "grasp_yaw": 90}
 
 
 def _raw(step: dict) -> dict:
-    raw = yaml.safe_load(load_task(TASK).source.read_text())
-    raw["demo_plan"] = [step]
-    return raw
+    return task_file_with_plan(TASK, [step])
 
 
 def test_flat_pinch_is_a_plan_grasp(tmp_path):

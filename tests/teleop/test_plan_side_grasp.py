@@ -6,17 +6,16 @@ import dataclasses
 import mujoco
 import numpy as np
 import pytest
-import yaml
 
 from sim import physics
 from sim.errors import SpecError
-from sim.registry import names
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample, task_seed
+from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 from teleop.plan_steps.pick_place import SIDE_GRASP_IN_M
 from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
+
+from task_files import task_file_with_plan
 
 TASK, EMBODIMENT = "tool_box_loading", "panda_orca"
 PICK = {"hand": "right", "pick": "drill", "place": "box", "place_offset": [0.0, 0.0, -0.06], "grasp": "side",
@@ -24,9 +23,7 @@ PICK = {"hand": "right", "pick": "drill", "place": "box", "place_offset": [0.0, 
 
 
 def _raw(step: dict) -> dict:
-    raw = yaml.safe_load(load_task(TASK).source.read_text())
-    raw["demo_plan"] = [step]
-    return raw
+    return task_file_with_plan(TASK, [step])
 
 
 def test_side_is_a_pick_grasp(tmp_path):
@@ -47,7 +44,7 @@ def _operator(step: dict):
     objects = dict(spec.objects)
     objects["drill"] = dataclasses.replace(objects["drill"], xy=(0.30, 0.05))     # within the right arm's easy reach
     spec = dataclasses.replace(spec, objects=objects, demo_plan=[step])
-    scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, task_seed(names("tasks").index(TASK), 0)))
+    scene = demonstration_scene(spec, EMBODIMENT)
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)
