@@ -4,7 +4,6 @@ hand's kinematics, and a real lift of a 1.6 cm jigsaw piece off the table."""
 import numpy as np
 import pytest
 
-from sim import physics
 from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
@@ -14,6 +13,7 @@ from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import hand_outline
 
+from plan_runs import rise_through_lift
 from task_files import task_file_with_plan
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
@@ -60,13 +60,7 @@ def test_flat_pinch_lifts_a_jigsaw_piece():
     data = home(scene)
     op = ScriptedOperator()
     op.reset(scene, data)
-    body = scene.object_body_ids["green_piece"]
-    z0, frames = data.xpos[body][2], op.sides["right"]["timeline"].frames
-    # the lift: the first rise of 10 cm after the approach (the hand comes down, closes, lifts)
-    lifted = next(f for prev, f in zip(frames[2:], frames[3:]) if f.pos[2] > prev.pos[2] + 0.1).end_step
-    for step in range(lifted):
-        physics.step_control(scene.model, data, op.act(step, data))
-    assert data.xpos[body][2] - z0 > 0.08
+    assert rise_through_lift(scene, data, op, "green_piece") > 0.08
 
 
 def test_a_flat_pinch_closes_either_side_of_its_grasp_point():
