@@ -87,6 +87,14 @@ def _object(value: str, info: ValidationInfo, *, but: tuple = (), extra: tuple =
 
 # a field naming one of the task's objects
 TaskObject = Annotated[Name, BeforeValidator(lambda name, info: _object(name, info))]
+# place_from: lowered from above, or slid in level through the side a container is open at
+PlaceFrom = Annotated[Name, BeforeValidator(lambda way: _one_of(way, PLACE_FROM, f"one of {list(PLACE_FROM)}"))]
+
+
+def _front_container(place: str, info: ValidationInfo, *, but: tuple = ()) -> str:
+    """`place` with place_from: front: one of the task's containers (not one of ``but``)."""
+    containers = [c for c in _containers(_scope(info)) if c not in but]
+    return _one_of(place, containers, f"with place_from: front, a container from {containers}")
 
 
 def _hinges(info: ValidationInfo) -> dict:
@@ -182,7 +190,7 @@ class PickStep(PlanStep, GraspFields):
     part_pinch: ClassVar[bool] = True
 
     pick: TaskObject
-    place_from: Name = "above"              # before `place`, which it constrains
+    place_from: PlaceFrom = "above"         # before `place`, which it constrains
     place: Name
     place_offset: PlaceOffset = None
     grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
@@ -195,17 +203,11 @@ class PickStep(PlanStep, GraspFields):
             raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
         return roll
 
-    @field_validator("place_from", mode="before")
-    @classmethod
-    def _a_way_in(cls, place_from: str) -> str:
-        return _one_of(place_from, PLACE_FROM, f"one of {list(PLACE_FROM)}")
-
     @field_validator("place", mode="before")
     @classmethod
     def _a_place(cls, place: str, info: ValidationInfo) -> str:
         if info.data.get("place_from") == PLACE_FROM_FRONT:
-            containers = _containers(_scope(info))
-            return _one_of(place, containers, f"with place_from: front, a container from {containers}")
+            return _front_container(place, info)
         return _object(place, info, extra=(TABLE_TARGET,))
 
 
@@ -395,23 +397,17 @@ class CarryStep(PlanStep):
     hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
 
     carry: TaskObject
-    place_from: Name = "above"              # before `place`, which it constrains
+    place_from: PlaceFrom = "above"         # before `place`, which it constrains
     place: Name
     place_offset: PlaceOffset = None
     grasp_height: Number = 0.0
     return_home: Bool = False
 
-    @field_validator("place_from", mode="before")
-    @classmethod
-    def _a_way_in(cls, place_from: str) -> str:
-        return _one_of(place_from, PLACE_FROM, f"one of {list(PLACE_FROM)}")
-
     @field_validator("place", mode="before")
     @classmethod
     def _a_place(cls, place: str, info: ValidationInfo) -> str:
         if info.data.get("place_from") == PLACE_FROM_FRONT:
-            containers = [c for c in _containers(_scope(info)) if c != info.data.get("carry")]
-            return _one_of(place, containers, f"with place_from: front, a container from {containers}")
+            return _front_container(place, info, but=(info.data.get("carry"),))
         return _object(place, info, but=(info.data.get("carry"),))
 
     @field_validator("grasp_height", mode="before")
