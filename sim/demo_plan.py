@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from sim.errors import SpecError
 from sim.schema.base import validate
 # the plan's vocabulary, used by the planners (teleop/plan_steps/)
-from sim.schema.demo_plan import (BOTH_HANDS, DRAG_HOOK_DEPTH_M, DRAG_PITCH_DEG, GRASP_YAW_ACROSS,  # noqa: F401
+from sim.schema.demo_plan import (BOTH_HANDS, DRAG_HOOK_DEPTH_M, DRAG_PALM, DRAG_PITCH_DEG, GRASP_YAW_ACROSS,  # noqa: F401
                                   PLACE_FROM_FRONT, POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, SIDE_GRASP,
                                   STEP_MODELS, TABLE_TARGET)
 

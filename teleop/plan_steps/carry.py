@@ -26,9 +26,8 @@ from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, quat, yawed)
-from teleop.plan_steps.front_place import (CEILING_GAP_M, OUTSIDE_M as FRONT_OUTSIDE_M, RELEASE_GAP_M,
-                                           SLIDE_CLEARANCE_M, SLIDE_STEPS as FRONT_SLIDE_STEPS, SideOpening,
-                                           front_release, side_opening)
+from teleop.plan_steps.front_place import (CEILING_GAP_M, SLIDE_STEPS as FRONT_SLIDE_STEPS, SideOpening,
+                                           front_release, side_opening, slide_start)
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import place_centre, rest_centre
 from teleop.transit import bounding_box_points, hand_outline
@@ -138,11 +137,10 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     holds = {}
     box = bounding_box_points(op.scene.model, data, op.scene.object_body_ids[name])[:, 2]
     bottom, top = float(centre[2] - box.min()), float(box.max() - centre[2])
+    height = float(item.get("grasp_height", 0.0))
     for side_name in ("right", "left"):
-        side = op.sides[side_name]
         out = SIDE_SIGN[side_name] * a
         # the palm's centre on the across face, the knuckles just short of the far face
-        height = float(item.get("grasp_height", 0.0))
         pitch_deg = fingers_pitch(op, side_name, a, height + bottom)
         pitch = np.radians(pitch_deg)
         contact = centre + height * UP + (depth - KNUCKLE_SHORT_M - knuckles * np.cos(pitch)) * f
@@ -206,9 +204,7 @@ def front_path(op: PlanningOperator, data: mujoco.MjData, name: str, holds: dict
         side = op.sides[side_name]
         closed = op.power(side, (FINGER_CLOSURE, FINGER_CLOSURE))
         ahead.append(hand_outline(side["hand"], side_name, closed, side["open"]) @ hand_rot.T + (squeezed - centre))
-    lead = float(np.max(np.concatenate(ahead) @ -way_in.out))
-    back = max(0.0, float((place - way_in.mouth) @ -way_in.out) + lead + FRONT_OUTSIDE_M)
-    return back, place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP
+    return slide_start(place, way_in, float(np.max(np.concatenate(ahead) @ -way_in.out)))
 
 
 def slide_in_and_part(op: PlanningOperator, side_name: str, hold: tuple, held: np.ndarray, place: np.ndarray,
@@ -230,7 +226,8 @@ def slide_in_and_part(op: PlanningOperator, side_name: str, hold: tuple, held: n
     # the palm eases off the object's side, then whatever of the hand reaches over the object
     # (a thumb's base over a bowl's rim) rises clear of its top: parted straight away, the
     # thumbs dragged the rim and tipped the baguette out (microwave_bowl_loading, stream path)
-    hand_pts = hand_outline(side["hand"], side_name, side["open"]) @ hand_rot.T + held + out * SQUEEZE_M
+    open_pts = hand_outline(side["hand"], side_name, side["open"]) @ hand_rot.T + held    # from the object's centre
+    hand_pts = open_pts + out * SQUEEZE_M
     above = hand_pts[(hand_pts @ out < across - RIM_CLEAR_M) & (np.abs(hand_pts @ f) <= depth)]
     rise = 0.0 if not len(above) else max(0.0, top + RIM_CLEAR_M - float(above[:, 2].min()))
     rise = min(rise, max(0.0, way_in.ceiling - CEILING_GAP_M - float(place[2] + hand_pts[:, 2].max())))
@@ -239,7 +236,7 @@ def slide_in_and_part(op: PlanningOperator, side_name: str, hold: tuple, held: n
     # drawn straight back out, the fingertips (turned in) pass behind the object's far side: the palms
     # part until the whole hand is clear of it (microwave_bowl_loading: parted SPREAD_M off the bowl,
     # the tips hooked it back out onto the table)
-    inner = float(np.min((hand_outline(side["hand"], side_name, side["open"]) @ hand_rot.T + held) @ out))
+    inner = float(np.min(open_pts @ out))
     part = max(SQUEEZE_M + SPREAD_M, across + SPREAD_M - inner)
     tl.add(SQUEEZE_STEPS, pos=over + out * part + rise * UP)
     tl.add(FRONT_SLIDE_STEPS, pos=over + out * part + rise * UP + back * way_in.out)

@@ -19,11 +19,10 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from sim.demo_plan import DRAG_HOOK_DEPTH_M, DRAG_PITCH_DEG
+from sim.demo_plan import DRAG_HOOK_DEPTH_M, DRAG_PALM, DRAG_PITCH_DEG
 from sim.embodiment.mirror import M
 from sim.errors import SpecError
 from sim.scene.sample import zone_centre
-from sim.schema.demo_plan import DRAG_PALM
 from teleop.geom_rays import body_geoms, nearest_hit
 from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
 from teleop.pinch_grasp import THUMB_TIP, fingertip_rows, fingertips_in_site_frame

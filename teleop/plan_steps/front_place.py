@@ -85,6 +85,14 @@ def front_release(op: PlanningOperator, data: mujoco.MjData, item: dict, name: s
                      way_in.floor + dz + op.scene.task.objects[name].rest_height + RELEASE_GAP_M])
 
 
+def slide_start(place: np.ndarray, way_in: SideOpening, lead: float) -> tuple[float, np.ndarray]:
+    """How far out along the opening, from ``place`` (where what is slid in is let go), it starts so
+    that what reaches ``lead`` ahead of ``place`` into the opening is clear of the opening's plane; and
+    ``place`` at the height it slides in at (its bottom clear of the cavity floor)."""
+    back = max(0.0, float((place - way_in.mouth) @ -way_in.out) + lead + OUTSIDE_M)
+    return back, place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP
+
+
 def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
                           offset: np.ndarray) -> None:
     """The held object ``name`` (its centre ``offset`` from the wrist, world) carried from where the hand
@@ -94,7 +102,7 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     tl: SideTimeline = side["timeline"]
     model = op.scene.model
     way_in = side_opening(op, data, item["place"], side["home"][0])
-    out, mouth = way_in.out, way_in.mouth
+    out = way_in.out
     place = front_release(op, data, item, name, way_in) - offset      # wrist, letting go
     op.leaves(name, place + offset - RELEASE_GAP_M * UP, on=item["place"])
     # how far ahead of the wrist (into the opening) the open or closed hand and the object reach
@@ -108,8 +116,7 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     open_pts = hand_outline(side["hand"], item["hand"], side["open"]) @ R_hand.reshape(3, 3).T
     room = way_in.ceiling - CEILING_GAP_M - float(place[2] + max(open_pts[:, 2].max(), hand_pts[:, 2].max()))
     rise = max(WITHDRAW_RISE_M, min(float(body_pts[:, 2].max() + OFF_TOP_M - open_pts[:, 2].min()), room))
-    back = max(0.0, float((place - mouth) @ -out) + lead + OUTSIDE_M)
-    slide = place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP
+    back, slide = slide_start(place, way_in, lead)
     carry_frame = len(tl.frames)
     op.set_off(side, data, item, CARRY_STEPS, pos=slide + back * out, carried=(name, offset))
     # outside the opening the operator looks where the object sits in the hand and corrects the rest
