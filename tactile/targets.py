@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 import trimesh
 
+from sim.unit_shapes import unit_icosphere
 from tactile.quantize import FINE_MM_PER_LEVEL
 from tactile.raycast import MeshRaycaster
 
@@ -32,16 +33,9 @@ def _arc_sections(radius: float) -> int:
 
 
 @functools.lru_cache(maxsize=None)
-def _unit_icosphere(level: int) -> trimesh.Trimesh:
-    """The unit icosphere of ``level``, built once per process: choosing a level measures every level
-    up to it, and each sphere or ellipsoid target then starts from a copy (never from this one)."""
-    return trimesh.creation.icosphere(subdivisions=level, radius=1.0)
-
-
-@functools.lru_cache(maxsize=None)
 def _unit_facet_depth(level: int) -> float:
     """Deepest point of the unit icosphere's faces below the sphere (their centres; edges vary)."""
-    return float(1.0 - np.linalg.norm(_unit_icosphere(level).triangles_center, axis=1).min())
+    return float(1.0 - np.linalg.norm(unit_icosphere(level).triangles_center, axis=1).min())
 
 
 def _sphere_subdivisions(radius: float) -> int:
@@ -63,7 +57,7 @@ def primitive_mesh(gtype: int, size) -> trimesh.Trimesh:
         return trimesh.creation.box(extents=2 * size)
     if gtype in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_ELLIPSOID):
         radii = size[:1].repeat(3) if gtype == mujoco.mjtGeom.mjGEOM_SPHERE else size
-        mesh = _unit_icosphere(_sphere_subdivisions(float(radii.max()))).copy()
+        mesh = unit_icosphere(_sphere_subdivisions(float(radii.max()))).copy()    # never the shared one
         mesh.apply_scale(radii)
         return mesh
     if gtype == mujoco.mjtGeom.mjGEOM_CYLINDER:
@@ -112,7 +106,7 @@ def _primitive_raycaster(gtype: int, size: tuple[float, ...]) -> MeshRaycaster:
 
 def clear_cache() -> None:
     _primitive_raycaster.cache_clear()
-    _unit_icosphere.cache_clear()
+    unit_icosphere.cache_clear()
 
 
 def geom_raycaster(model: mujoco.MjModel, geom_id: int) -> MeshRaycaster:

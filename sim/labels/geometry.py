@@ -11,12 +11,14 @@ containment test; any other mesh falls back to its convex hull.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache, cached_property
+from functools import cached_property
 
 import mujoco
 import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull
+
+from sim.unit_shapes import unit_icosphere
 
 G = mujoco.mjtGeom
 BOX, SPHERE, ELLIPSOID, CYLINDER, CAPSULE, MESH, PLANE = (int(G.mjGEOM_BOX), int(G.mjGEOM_SPHERE),
@@ -27,6 +29,7 @@ PRIMITIVE_TYPES = (BOX, SPHERE, ELLIPSOID, CYLINDER, CAPSULE)
 SOLID_TYPES = PRIMITIVE_TYPES + (MESH,)
 HULL_TOLERANCE = 1e-9
 SURFACE_SECTIONS = 24     # facets round cylinders and capsules for surface samples
+SURFACE_SPHERE_LEVEL = 2  # icosphere subdivisions of spheres and ellipsoids for surface samples
 
 
 def primitive_contains(kind: int, size: np.ndarray, x, y, z) -> np.ndarray:
@@ -90,13 +93,6 @@ class MeshShape:
         return self.trimesh.contains(points)
 
 
-@cache
-def _unit_icosphere() -> trimesh.Trimesh:
-    """The unit sphere's surface mesh, built once per process (~14 ms each time; every render file's
-    labels sample the spheres and ellipsoids of its objects). Callers scale a copy."""
-    return trimesh.creation.icosphere(subdivisions=2)
-
-
 class GeomShapes:
     """Shape data of a model's geoms, with compiled meshes converted once."""
 
@@ -155,7 +151,7 @@ class GeomShapes:
         if kind == BOX:
             return trimesh.creation.box(extents=2.0 * s)
         if kind in (SPHERE, ELLIPSOID):
-            ball = _unit_icosphere().copy()
+            ball = unit_icosphere(SURFACE_SPHERE_LEVEL).copy()     # shared: every render file samples it
             ball.apply_scale(s if kind == ELLIPSOID else np.full(3, s[0]))
             return ball
         if kind == CYLINDER:

@@ -5,7 +5,8 @@ import mujoco
 import numpy as np
 import trimesh
 
-from tactile.targets import _sphere_subdivisions, _unit_icosphere, clear_cache, primitive_mesh
+from sim.unit_shapes import unit_icosphere
+from tactile.targets import _sphere_subdivisions, clear_cache, primitive_mesh
 
 SPHERE, ELLIPSOID = mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_ELLIPSOID
 
@@ -35,9 +36,9 @@ def test_spheres_and_ellipsoids_match_a_fresh_icosphere_byte_for_byte():
 def test_a_target_mesh_is_a_copy_that_leaves_the_shared_unit_sphere_alone():
     clear_cache()
     level = _sphere_subdivisions(0.036)
-    before = np.asarray(_unit_icosphere(level).vertices).copy()
+    before = np.asarray(unit_icosphere(level).vertices).copy()
     mesh = primitive_mesh(SPHERE, (0.036, 0, 0))
     mesh.vertices += 1.0                      # a caller changing its mesh
-    assert np.array_equal(np.asarray(_unit_icosphere(level).vertices), before)
+    assert np.array_equal(np.asarray(unit_icosphere(level).vertices), before)
     assert np.allclose(np.linalg.norm(before, axis=1), 1.0)
     assert same_bytes(primitive_mesh(SPHERE, (0.036, 0, 0)), fresh((0.036,) * 3))
