@@ -40,6 +40,7 @@ RELEASE_GAP_M = 0.005         # lowered to just above the plate: fruit let go hi
 PALM_CLEARANCE_M = 0.004
 SIDE_GRASP_ROLL_DEG = 90.0    # `grasp: side`: the right hand turned palm towards the body's midline, thumb up
 SIDE_GRASP_IN_M = 0.05        # `grasp: side` comes down this far out from the object, then moves in level
+PALM_NORMAL = PALM_DOWN.T @ -UP   # out of the palm, wrist-site frame
 CARRY_CLEARANCE_M = 0.02      # the carried object's bottom above its target's top, moving across
 
 
@@ -233,7 +234,7 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
     hand_quat = quat(hand_rot)
     grasp = op.object_pos(data, name) - offset
     reach = len(tl.frames)
-    beside = grasp - side_in_m * (hand_rot @ PALM_DOWN.T @ -UP)     # out from the object, along the palm's normal
+    beside = grasp - side_in_m * (hand_rot @ PALM_NORMAL)     # out from the object, along the palm's normal
     above = APPROACH_HEIGHT_M
     if side_in_m:       # the hand on its side reaches down as far as across: it comes from above the object's top
         top = float(bounding_box_points(op.scene.model, data, op.scene.object_body_ids[name])[:, 2].max())
@@ -327,7 +328,7 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
     if side_roll(item):     # the way the hand came in, back out: along its palm's normal
         held = np.zeros(9)
         mujoco.mju_quat2Mat(held, tl.frames[-1].quat)
-        out = -SIDE_GRASP_IN_M * (held.reshape(3, 3) @ PALM_DOWN.T @ -UP)
+        out = -SIDE_GRASP_IN_M * (held.reshape(3, 3) @ PALM_NORMAL)
     lower_and_release(op, item, name, offset, place, out=out)
     if grasp_kind(item) == "flat_pinch":      # looks at it in the hand, squares it, eases the tips apart
         ready = flat_pinch(op, data, item, name)[1]      # the pre-shape it came down with (same data: same plan)

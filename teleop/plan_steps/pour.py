@@ -24,13 +24,12 @@ from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, SIDE_GRASP,
 from sim.scene.reach import PALM_DOWN
 from teleop.operator_motion import LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.operator import PlanningOperator
-from teleop.plan_steps.pick_place import (SIDE_GRASP_ROLL_DEG, grasp_and_lift, lower_and_release, place_centre,
-                                         rest_centre)
+from teleop.plan_steps.pick_place import (PALM_NORMAL, SIDE_GRASP_ROLL_DEG, grasp_and_lift, lower_and_release,
+                                         place_centre, rest_centre)
 from teleop.transit import CLEARANCE_M, hand_outline
 
 
 FINGERS_PALM_DOWN = PALM_DOWN.T @ np.array([0.0, 1.0, 0.0])   # the fingers' direction, wrist-site frame
-PALM_NORMAL = PALM_DOWN.T @ np.array([0.0, 0.0, -1.0])         # out of the palm, wrist-site frame
 MOUTH_ABOVE_RIM_M = 0.05      # the tipped mouth this high above the target's top: pours in, touches nothing
 BOTTOM_ABOVE_RIM_M = 0.04     # carried upright over the target, the pourer's bottom clears its top by this
 RIM_INSET_M = 0.03            # the aim stays this far inside a container's cavity walls
