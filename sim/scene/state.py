@@ -81,6 +81,13 @@ class SceneObserver:
         group = self._group(tuple(names)) if names else self._task_objects
         return group.states(data)
 
+    def object_motion_into(self, data: mujoco.MjData, names, pose: np.ndarray, lin_vel: np.ndarray,
+                           ang_vel: np.ndarray) -> None:
+        """The rows ``object_states(data, names)`` gives as (pos, quat), lin_vel, ang_vel, written into
+        ``pose`` (n, 7), ``lin_vel`` and ``ang_vel`` (n, 3) with no per-object Python objects (the replay
+        stores them every control step)."""
+        self._group(tuple(names)).motion_into(data, pose, lin_vel, ang_vel)
+
     def object_pose_into(self, data: mujoco.MjData, out: np.ndarray) -> None:
         """The task objects' (pos, wxyz quat) rows, in ``scene.object_names`` order, written into ``out``
         (n_objects, 7): the values ``object_states`` gives, without building them."""
@@ -139,6 +146,18 @@ class _ObjectGroup:
         if self.all_free:
             return free
         return {n: free[n] if n in free else self.fixed[n] for n in self.names}
+
+    def motion_into(self, data: mujoco.MjData, pose: np.ndarray, lin_vel: np.ndarray, ang_vel: np.ndarray) -> None:
+        twist = data.qvel[self.twist_idx]
+        spin = np.matmul(data.xmat[self.bodies].reshape(-1, 3, 3), twist[:, 3:, None])   # as in states()
+        rows = self.free_rows
+        pose[rows] = data.qpos[self.pose_idx]
+        lin_vel[rows] = twist[:, :3]
+        ang_vel[rows] = spin[:, :, 0]
+        if not self.all_free:
+            pose[self.fixed_rows] = self.fixed_pose
+            lin_vel[self.fixed_rows] = 0.0
+            ang_vel[self.fixed_rows] = 0.0
 
     def pose_into(self, data: mujoco.MjData, out: np.ndarray) -> None:
         if self.all_free:
