@@ -355,7 +355,11 @@ class StrikeStep(PlanStep, GraspFields):
     """{hand, strike, tool, strike_point, place, [place_offset], [grasp], [grasp_point], [grasp_yaw],
     [approach_pitch_deg], [after], [wait_s]}: pick the tool up (grasp fields as for `pick`), strike the
     target object once with the tool's strike_point (tool frame, on the tool), then put the tool onto or
-    into `place` (an object, or `table` with place_offset a spot of the table top)."""
+    into `place` (an object, or `table` with place_offset a spot of the table top). grasp: flat_pinch takes a
+    tool lying flat (a hammer by its handle, grasp_point near its balance point)."""
+
+    grasps: ClassVar[tuple[str, ...]] = (*PLAN_GRASPS, "flat_pinch")
+    part_pinch: ClassVar[bool] = True       # a pinch's grasp_point: where on the handle it closes
 
     strike: TaskObject
     tool: Name

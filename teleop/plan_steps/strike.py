@@ -5,7 +5,9 @@ breadth above the block, swing it down through the block's top (the block stops 
 then lay the hammer where it belongs. The part that hits is the step's `strike_point` (tool frame);
 where it sits relative to the wrist comes from the grasp (the tool keeps its orientation in the
 hand), so the swing is aimed by the strike point, not by the wrist. The pick and the put-away are
-the `pick` step's (teleop/plan_steps/pick_place.py).
+the `pick` step's (teleop/plan_steps/pick_place.py), grasps included: a tool lying flat whose handle
+no palm grasp gets round (screwdriver_box_hammer's 0.6 kg hammer, its handle 6 mm off the table) is
+taken with `grasp: flat_pinch` at its balance point (`grasp_point`), and swung level.
 """
 
 from __future__ import annotations

@@ -26,6 +26,7 @@ SETTINGS = [
     ("gaming_desk_setup", "jaka_zu7_dexhand021", 1),
     ("medicine_shoebox_pack", "panda_orca", 4),
     ("microwave_bowl_loading", "ur5_schunk", 1),
+    ("screwdriver_box_hammer", "ur5_rh56dfx", 0),
     ("shoebox_accessory_pack", "xarm7_leap", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("trash_disposal", "ur5_rh56dfx", 0),
