@@ -3,7 +3,8 @@
 Each step is one kind, named by the field that says what it acts on: `pick` (carry an object to a
 target), `drag` (pull a container into a zone), `pour` (tip a bottle's mouth over a target), `press`
 (press keys or buttons in order), `turn` (swing a lid or a door to a joint angle), `carry` (both hands
-carry an object between their palms), `strike` (hit a target once with a tool, then put the tool away).
+carry an object between their palms), `strike` (hit a target once with a tool, then put the tool away),
+`handover` (one hand gives an object to the other in the air).
 Every field is checked when the task loads by the step kind's schema (sim/schema/demo_plan.py), so a
 bad plan fails then, naming the step and the field. A new kind is a new model there and a planner in
 teleop/plan_steps/.

@@ -19,6 +19,7 @@ from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
 from sim.scene.parts import parts_aabb
 
 from .base import Bool, CatalogModel, Int, Name, Number
+from .plan_via import VIA_TIMES_RANGE, check_via
 
 TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
 HANDS = ("left", "right")
@@ -61,6 +62,8 @@ TableSpot = _vector((2,), "[x, y] of the table top in metres")
 TableDirection = _vector((2,), "[dx, dy], a direction on the table top")
 ZoneOffset = _vector((2,), "[dx, dy] from the zone's centre in metres")
 ObjectPoint = _vector((3,), "[x, y, z] in the object's frame, metres")
+ObjectAxis = _vector((3,), "[x, y, z], a direction in the object's frame")
+AirPoint = _vector((3,), "[x, y, z] of the table top in metres, z above it")
 
 
 def _scope(info: ValidationInfo):
@@ -184,7 +187,12 @@ class PickStep(PlanStep, GraspFields):
     object's frame; grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
     its centre or of grasp_point (a spatula's handle clear of its blade); grasp: side is the palm grasp
     from the side, thumb up, around an upright part (a drill's grip under its motor, a bottle), turned
-    grasp_roll_deg about the fingers (default 90: thumb up)."""
+    grasp_roll_deg about the fingers (default 90: thumb up). place_axis [x, y, z] (object frame) is turned
+    on the way to point straight down and lowered that end first (a marker stood up in a pen cup; place_offset's
+    dz then places that end). via [{inside: <container>} | {over: <object>}, ...] takes the carried object's
+    via_point through those stops, via_times rounds, on its way (a ladle into a pot, then over a bowl);
+    hold: true keeps it in the hand over `place` (dz: its bottom above the table) for the hand's next pick
+    of it (teleop/plan_steps/via.py)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -195,6 +203,31 @@ class PickStep(PlanStep, GraspFields):
     place_offset: PlaceOffset = None
     grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
                                    description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
+    place_axis: ObjectAxis = None           # turned on the way to point straight down (teleop/plan_steps/axis_place.py)
+    hold: Bool = False                      # kept in the hand over `place` for its next step (plan_steps/via.py)
+    via: list[dict] = None                  # waypoints on the way to `place`, checked by sim/schema/plan_via.py
+    via_times: Int = Field(None, ge=VIA_TIMES_RANGE[0], le=VIA_TIMES_RANGE[1],
+                           description=f"a whole number of rounds in [{VIA_TIMES_RANGE[0]}, {VIA_TIMES_RANGE[1]}]")
+    via_point: ObjectPoint = None           # the carried object's point that goes through the stops (a ladle's bowl)
+
+    @field_validator("hold", mode="before")
+    @classmethod
+    def _held_over_the_place(cls, hold, info: ValidationInfo):
+        if hold is True and info.data.get("place_from") == PLACE_FROM_FRONT:
+            raise ValueError(f"no hold: true with place_from: {PLACE_FROM_FRONT} (held over the place, not slid in)")
+        return hold
+
+    @field_validator("via", mode="before")
+    @classmethod
+    def _stops(cls, via, info: ValidationInfo):
+        return check_via(via, picked=info.data.get("pick"), objects=_scope(info).objects)
+
+    @field_validator("via_times", "via_point", mode="before")
+    @classmethod
+    def _only_with_via(cls, value, info: ValidationInfo):
+        if info.data.get("via") is None:
+            raise ValueError(f"no {info.field_name} without via (the stops it goes through)")
+        return value
 
     @field_validator("grasp_roll_deg", mode="before")
     @classmethod
@@ -209,6 +242,15 @@ class PickStep(PlanStep, GraspFields):
         if info.data.get("place_from") == PLACE_FROM_FRONT:
             return _front_container(place, info)
         return _object(place, info, extra=(TABLE_TARGET,))
+
+    @field_validator("place_axis", mode="before")
+    @classmethod
+    def _an_axis_from_above(cls, axis, info: ValidationInfo):
+        if info.data.get("place_from") == PLACE_FROM_FRONT:
+            raise ValueError(f"no place_axis with place_from: {PLACE_FROM_FRONT} (slid in level, as held)")
+        if isinstance(axis, list) and all(map(_is_number, axis)) and math.hypot(*axis) < 1e-9:
+            raise ValueError("a non-zero [x, y, z] in the object's frame")
+        return axis
 
 
 class DragStep(PlanStep):
@@ -281,12 +323,14 @@ class PressStep(PlanStep):
 
 class PourStep(PlanStep, GraspFields):
     """{hand, pour, into, [tilt_deg], [tilt_toward], [grasp], [approach_pitch_deg], [grasp_yaw],
-    [grasp_point], [place_offset], [after], [wait_s]}: tip a pourer (an object with a `mouth_axis`) over
+    [grasp_point], [place_offset], [hold], [after], [wait_s]}: tip a pourer (an object with a `mouth_axis`) over
     `into` (an object, or a task point: poured just above it), then set it down where it was or at
     place_offset [x, y] of the table top; tilt_toward [dx, dy] (table top) is the way the mouth tips,
     e.g. away from something the bottle's body would hit; grasp_yaw (degrees only: "across" is worked
     out for a hand closing from above) and grasp_point as for `pick` (e.g. a side grasp held above the
-    middle, so that the thumb comes down beside a bottle's shoulder, not onto it)."""
+    middle, so that the thumb comes down beside a bottle's shoulder, not onto it). hold: true keeps it in
+    the hand, upright over the target, for the hand's next step (a handover back); a bottle the hand holds
+    already (handed over) is poured from the hand, not grasped again."""
 
     grasps: ClassVar[tuple[str, ...]] = POUR_GRASPS
     across: ClassVar[bool] = False
@@ -298,6 +342,7 @@ class PourStep(PlanStep, GraspFields):
                              description=f"degrees in [{POUR_TILT_RANGE_DEG[0]:g}, {POUR_TILT_RANGE_DEG[1]:g}]")
     place_offset: TableSpot = None
     tilt_toward: TableDirection = None
+    hold: Bool = False                      # kept in the hand, upright over the target, for a handover next
 
     @field_validator("tilt_toward")
     @classmethod
@@ -321,10 +366,11 @@ class PourStep(PlanStep, GraspFields):
 
 
 class TurnStep(PlanStep):
-    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [after], [wait_s]}: swing a
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [return_home], [after], [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
     on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
-    speed (m/s) is how fast the hand's contact moves along the arc (default 0.09)."""
+    speed (m/s) is how fast the hand's contact moves along the arc (default 0.09); return_home: false leaves
+    the hand risen off the link where it let go, so the next step sets off from there."""
 
     turn: Name
     to: Number
@@ -332,6 +378,8 @@ class TurnStep(PlanStep):
     speed: Number = Field(None, gt=TURN_SPEED_RANGE_M_S[0], le=TURN_SPEED_RANGE_M_S[1],
                           description=f"m/s of the contact along the arc in ({TURN_SPEED_RANGE_M_S[0]:g}, "
                                       f"{TURN_SPEED_RANGE_M_S[1]:g}]")
+    # false: the hand stays where it rose off the link (a tall door pulled open stands between it and home)
+    return_home: Bool = True
 
     @field_validator("turn", mode="before")
     @classmethod
@@ -426,8 +474,52 @@ class CarryStep(PlanStep):
         return height
 
 
+class HandoverStep(PlanStep, GraspFields):
+    """{hand, handover, to_hand, at, [pick_from], [take_point], [take_roll_deg], [grasp], [grasp_point],
+    [grasp_roll_deg], [approach_pitch_deg], [grasp_yaw], [after], [wait_s]}: `hand` gives the object to `to_hand` in the air,
+    its centre at `at` [x, y, z] (table top; z above it). A hand that does not hold it yet picks it first,
+    as `pick` with the grasp fields (pick_from: front, with grasp: side, takes it out level through the side
+    a container is open at, a bottle out of a fridge). `to_hand` takes it from the other side with a side
+    grasp at take_point (object frame, default its centre: clear of the giver's grasp_point), turned
+    take_roll_deg about the fingers (as a side grasp's grasp_roll_deg, default 90: thumb up);
+    the giver lets go and goes home. The next step of `to_hand` that names the object (a pour, a pick, a
+    handover back) starts holding it."""
+
+    grasps: ClassVar[tuple[str, ...]] = (SIDE_GRASP, "power")
+
+    handover: TaskObject
+    to_hand: Name
+    at: AirPoint
+    pick_from: PlaceFrom = "above"
+    take_point: ObjectPoint = None
+    take_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
+                                  description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
+    grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
+                                   description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
+
+    @field_validator("to_hand", mode="before")
+    @classmethod
+    def _the_other_hand(cls, to_hand: str, info: ValidationInfo) -> str:
+        others = [h for h in HANDS if h != info.data.get("hand")]
+        return _one_of(to_hand, others, " or ".join(map(repr, others)) + " (the other hand)")
+
+    @field_validator("pick_from", mode="before")
+    @classmethod
+    def _front_with_a_side_grasp(cls, way: str, info: ValidationInfo) -> str:
+        if way == PLACE_FROM_FRONT and info.data.get("grasp") != SIDE_GRASP:
+            raise ValueError(f"pick_from: {PLACE_FROM_FRONT} only with grasp: {SIDE_GRASP} (the hand comes in level)")
+        return way
+
+    @field_validator("grasp_roll_deg", mode="before")
+    @classmethod
+    def _side_only(cls, roll: float, info: ValidationInfo) -> float:
+        if info.data.get("grasp") != SIDE_GRASP:
+            raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
+        return roll
+
+
 # a step's kind is the one of these fields it has
 STEP_MODELS: dict[str, type[PlanStep]] = {
     "pick": PickStep, "drag": DragStep, "pour": PourStep, "press": PressStep, "turn": TurnStep,
-    "carry": CarryStep, "strike": StrikeStep,
+    "carry": CarryStep, "strike": StrikeStep, "handover": HandoverStep,
 }

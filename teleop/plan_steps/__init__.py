@@ -1,7 +1,9 @@
 """The scripted operator's planners, one per plan step kind (sim/demo_plan.py STEP_KINDS): each
 appends the step's wrist keyframes and hand targets to its hand's timeline."""
 
-from teleop.plan_steps import carry, drag, pick_place, pour, press, strike, turn
+from teleop.plan_steps import carry, drag, handover, held, pick, pour, press, strike, turn
+from teleop.plan_steps import via      # a pick through waypoints, or kept in the hand
 
-PLANNERS = {"pick": pick_place.plan, "drag": drag.plan, "pour": pour.plan, "press": press.plan, "turn": turn.plan,
-             "carry": carry.plan, "strike": strike.plan}
+PLANNERS = {"pick": via.planner(held.planner("pick", pick.plan)), "drag": drag.plan,
+            "pour": held.planner("pour", pour.plan),
+            "press": press.plan, "turn": turn.plan, "carry": carry.plan, "strike": strike.plan, "handover": handover.plan}

@@ -1,4 +1,5 @@
-"""Plan step `pick`: carry an object to a target (another object, or a spot of the table).
+"""Plan step `pick`'s parts (teleop/plan_steps/pick.py puts them together): carry an object to a target
+(another object, or a spot of the table).
 
 Approach, descend, close, lift, carry, lower, open, retreat; palm down, or with the fingers pitched
 down (`approach_pitch_deg`), turned about the vertical (`grasp_yaw`). Where the object sits in the
@@ -16,7 +17,7 @@ import functools
 import mujoco
 import numpy as np
 
-from sim.demo_plan import GRASP_YAW_ACROSS, PLACE_FROM_FRONT, SIDE_GRASP, TABLE_TARGET
+from sim.demo_plan import GRASP_YAW_ACROSS, SIDE_GRASP, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
@@ -24,7 +25,6 @@ from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_
                                     axis_rotation, pitched_palm_down, quat, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
 from teleop.plan_steps.flat_place import flat_place
-from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.part_pinch import part_width
 from teleop.transit import bounding_box_points, hand_outline
@@ -335,12 +335,3 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
         flat_place(op, data, item, name, offset, carry_frame, lower_frame, ready)
     if item["place"] != TABLE_TARGET:
         op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
-
-
-def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
-    roll = side_roll(item)
-    offset = grasp_and_lift(op, data, item, item["pick"], roll_deg=roll, side_in_m=SIDE_GRASP_IN_M if roll else 0.0)
-    if item.get("place_from") == PLACE_FROM_FRONT:      # slid in through a side opening (front_place.py)
-        carry_and_place_front(op, data, item, item["pick"], offset)
-    else:
-        carry_and_place(op, data, item, item["pick"], offset)

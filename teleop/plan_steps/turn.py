@@ -156,8 +156,11 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     pos = pos - APPROACH_HEIGHT_M * (R[:, 1] if palm_turns(arc[-1], palm_from, way) else R[:, 2])
     tl.add(DURATIONS["retreat"], pos=pos)
     tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
-    # back to where the hand rests: the arm leaves the pose it stretched into around the link
-    tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
+    # back to where the hand rests: the arm leaves the pose it stretched into around the link; unless
+    # `return_home: false`: a door pulled open past square stands between the hand and home (the way home
+    # shoves it back), so the hand waits there for its next step
+    if item.get("return_home", True):
+        tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
     op.link_angles[item["turn"]] = link.rest_angle(target)
 
 

@@ -28,6 +28,7 @@ SETTINGS = [
     ("microwave_bowl_loading", "ur5_schunk", 1),
     ("screwdriver_box_hammer", "ur5_rh56dfx", 0),
     ("shoebox_accessory_pack", "xarm7_leap", 0),
+    ("soup_serving", "ur5_shadow", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("trash_disposal", "ur5_rh56dfx", 0),
     ("wine_glass_plate_balance", "xarm7_ability", 0),

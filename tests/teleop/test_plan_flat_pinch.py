@@ -81,9 +81,13 @@ def test_a_flat_pinch_closes_either_side_of_its_grasp_point():
     assert parse_task(_raw({**PICK, "grasp_point": point}), spec.source).demo_plan[0]["grasp_point"] == point
 
 
-def test_flat_pinch_is_for_pick_steps_only(tmp_path):
-    """A strike's tool is picked up with the grasps a strike was built with: no flat pinch."""
-    raw = _raw({"hand": "right", "strike": "white_piece", "tool": "green_piece", "strike_point": [0.0, 0.0, 0.0],
-                "place": "table", "place_offset": [0.1, 0.1], "grasp": "flat_pinch"})
-    with pytest.raises(SpecError, match=r"jigsaw.yaml: field 'demo_plan\[0\].grasp'.*\['power', 'pinch'\]"):
+def test_flat_pinch_is_for_steps_that_pick_a_thing_lying_flat(tmp_path):
+    """`pick` and `strike` (a hammer lying flat) take a flat pinch; a handover, which passes an object
+    held in the air, is refused it, the grasps it takes named."""
+    strike = {"hand": "right", "strike": "white_piece", "tool": "green_piece", "strike_point": [0.0, 0.0, 0.0],
+              "place": "table", "place_offset": [0.1, 0.1], "grasp": "flat_pinch"}
+    assert parse_task(_raw(strike), tmp_path / "jigsaw.yaml").demo_plan[0]["grasp"] == "flat_pinch"
+    raw = _raw({"hand": "right", "handover": "green_piece", "to_hand": "left", "at": [0.0, 0.0, 0.2],
+                "grasp": "flat_pinch"})
+    with pytest.raises(SpecError, match=r"jigsaw.yaml: field 'demo_plan\[0\].grasp'.*\['side', 'power'\]"):
         parse_task(raw, tmp_path / "jigsaw.yaml")

@@ -1,0 +1,25 @@
+"""Plan step `pick`: grasp and lift (teleop/plan_steps/pick_place.py), then one of three ways to put
+the object where it goes: slid in level through the side a container is open at (`place_from: front`,
+front_place.py), turned on the way so that an axis points down and lowered that end first
+(`place_axis`, axis_place.py), or carried over the target, lowered and let go (pick_place.py)."""
+
+from __future__ import annotations
+
+import mujoco
+
+from sim.demo_plan import PLACE_FROM_FRONT
+from teleop.plan_steps.axis_place import carry_and_place_axis_down
+from teleop.plan_steps.front_place import carry_and_place_front
+from teleop.plan_steps.operator import PlanningOperator
+from teleop.plan_steps.pick_place import SIDE_GRASP_IN_M, carry_and_place, grasp_and_lift, side_roll
+
+
+def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
+    roll = side_roll(item)
+    offset = grasp_and_lift(op, data, item, item["pick"], roll_deg=roll, side_in_m=SIDE_GRASP_IN_M if roll else 0.0)
+    if item.get("place_from") == PLACE_FROM_FRONT:
+        carry_and_place_front(op, data, item, item["pick"], offset)
+    elif "place_axis" in item:
+        carry_and_place_axis_down(op, data, item, item["pick"], offset)
+    else:
+        carry_and_place(op, data, item, item["pick"], offset)
