@@ -66,6 +66,13 @@ ObjectAxis = _vector((3,), "[x, y, z], a direction in the object's frame")
 AirPoint = _vector((3,), "[x, y, z] of the table top in metres, z above it")
 
 
+def _side_grasp_roll(roll: float, info: ValidationInfo) -> float:
+    """grasp_roll_deg is a side grasp's turn about the fingers: refused with any other grasp."""
+    if info.data.get("grasp") != SIDE_GRASP:
+        raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
+    return roll
+
+
 def _scope(info: ValidationInfo):
     return info.context["scope"]
 
@@ -232,9 +239,7 @@ class PickStep(PlanStep, GraspFields):
     @field_validator("grasp_roll_deg", mode="before")
     @classmethod
     def _side_only(cls, roll: float, info: ValidationInfo) -> float:
-        if info.data.get("grasp") != SIDE_GRASP:
-            raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
-        return roll
+        return _side_grasp_roll(roll, info)
 
     @field_validator("place", mode="before")
     @classmethod
@@ -513,9 +518,7 @@ class HandoverStep(PlanStep, GraspFields):
     @field_validator("grasp_roll_deg", mode="before")
     @classmethod
     def _side_only(cls, roll: float, info: ValidationInfo) -> float:
-        if info.data.get("grasp") != SIDE_GRASP:
-            raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
-        return roll
+        return _side_grasp_roll(roll, info)
 
 
 # a step's kind is the one of these fields it has

@@ -22,7 +22,9 @@ import numpy as np
 from evaluation.geometry import axis_extent
 from sim.demo_plan import POUR_DEFAULT_GRASP, POUR_DEFAULT_TILT_DEG, SIDE_GRASP, TABLE_TARGET
 from sim.scene.reach import PALM_DOWN
-from teleop.operator_motion import LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
+from sim.errors import SpecError
+from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
+from teleop.plan_steps.held import keep, take
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import (PALM_NORMAL, SIDE_GRASP_ROLL_DEG, grasp_and_lift, lower_and_release,
                                          place_centre, rest_centre)
@@ -105,11 +107,19 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     tl: SideTimeline = side["timeline"]
     name, target = item["pour"], item["into"]
     obj = op.scene.task.objects[name]
-    start = op.object_pos(data, name)
-    obj_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).copy()
-    grasp = item.get("grasp", POUR_DEFAULT_GRASP)
-    roll = 0.0 if grasp != SIDE_GRASP else SIDE_GRASP_ROLL_DEG * (1.0 if item["hand"] == "right" else -1.0)
-    offset = grasp_and_lift(op, data, item, name, roll_deg=roll)     # object centre from the wrist, as held
+    holding = take(op, item, name)      # handed over by the other hand: poured from the hand, not grasped
+    if holding is None:
+        start = op.object_pos(data, name)
+        obj_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).copy()
+        grasp = item.get("grasp", POUR_DEFAULT_GRASP)
+        roll = 0.0 if grasp != SIDE_GRASP else SIDE_GRASP_ROLL_DEG * (1.0 if item["hand"] == "right" else -1.0)
+        offset = grasp_and_lift(op, data, item, name, roll_deg=roll)     # object centre from the wrist, as held
+    elif item.get("hold", False) or "place_offset" in item:
+        start, offset, obj_rot = None, holding[0].copy(), holding[1]
+    else:
+        raise SpecError(op.scene.task.source, "demo_plan", "a pour of a bottle the hand holds sets it down at "
+                        "place_offset [x, y] of the table (it came from the other hand), or keeps it (hold: true)",
+                        item)
     hand_rot = np.zeros(9)
     mujoco.mju_quat2Mat(hand_rot, tl.frames[-1].quat)
     hand_rot = hand_rot.reshape(3, 3)
@@ -137,15 +147,32 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     over = tipped.copy()
     over[2] = max(tipped[2], top + BOTTOM_ABOVE_RIM_M + bottom - offset[2])
     carry = len(tl.frames)
-    tl.add(POUR_DURATIONS["to_target"], pos=over)
+    if holding is None:
+        tl.add(POUR_DURATIONS["to_target"], pos=over)
+    else:       # from where the handover left it: around whatever stands between
+        op.set_off(side, data, item, POUR_DURATIONS["to_target"], pos=over, carried=(name, offset))
     tl.add(POUR_DURATIONS["tilt"], pos=tipped, quat=quat(T @ hand_rot))
     tl.add(POUR_DURATIONS["pour"])
     tl.add(POUR_DURATIONS["untilt"], pos=over, quat=quat(hand_rot))
     untilted = len(tl.frames) - 1
     if target in op.scene.task.objects:     # an object may have been nudged since; a point stays put
         op.look_again(side, target, data, carry, len(tl.frames))
-    # back down where it came from, or at place_offset of the table
-    spot = {"place": TABLE_TARGET, "place_offset": list(item.get("place_offset", start[:2]))}
+    if item.get("hold", False):     # kept upright over the target for the hand's next step (a handover)
+        tl.add(DURATIONS["hold"])   # the look after the untilt turns the bottle upright here
+        keep(op, item["hand"], name, offset, obj_rot)
+    else:
+        set_down(op, data, item, name, offset, hand_rot, start)
+    op.on_frame_end(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
+                                                    range(untilted + 1, len(tl.frames))))
+
+
+def set_down(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray,
+             hand_rot: np.ndarray, start: np.ndarray | None) -> None:
+    """Back down at place_offset of the table, else where it came from (``start``), and let go."""
+    side = op.sides[item["hand"]]
+    tl: SideTimeline = side["timeline"]
+    obj = op.scene.task.objects[name]
+    spot = {"place": TABLE_TARGET, "place_offset": list(item["place_offset"] if "place_offset" in item else start[:2])}
     place = place_centre(op, data, spot, name) - offset
     op.leaves(name, rest_centre(place + offset))
     tl.add(POUR_DURATIONS["back"], pos=place + LIFT_HEIGHT_M * UP)
@@ -154,8 +181,6 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     lowest = float(np.min((hand_outline(side["hand"], item["hand"], side["open"]) @ hand_rot.T)[:, 2]))
     top = place[2] + offset[2] + float(obj.half_extents[2])
     lower_and_release(op, item, name, offset, place, rise_to=top + CLEARANCE_M - lowest)
-    op.on_frame_end(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
-                                               range(untilted + 1, len(tl.frames))))
 
 
 def upright_in_hand(op: PlanningOperator, side: dict, name: str, axis_local: np.ndarray, hand_rot: np.ndarray,

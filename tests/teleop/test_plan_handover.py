@@ -92,12 +92,12 @@ def test_steps_after_a_handover_start_from_holding(tmp_path):
     fridge_front_y = data.xpos[scene.object_body_ids["fridge"]][1] - 0.17
     assert all(f.pos[1] < fridge_front_y for f in op.sides["right"]["timeline"].frames)
     assert op.held == {}
-    # without the memory of what is held, the pour would grasp the bottle where it stands in the fridge
+    # without the memory of what is held, the hand-back would be a plain pick of the bottle where it stands
     calls = []
-    planned = planner("pour", lambda op_, data_, item: calls.append(item))
+    planned = planner(lambda op_, data_, item: calls.append(item))
     op.held = {}
-    planned(op, data, {**POUR, "hold": False})
-    assert calls                                    # nothing held, no hold: pour's own planner
+    planned(op, data, dict(PUT))
+    assert calls                                    # nothing held: pick's own planner
 
 
 def _run(scene, data, op, steps: int) -> None:
