@@ -10,6 +10,7 @@ out-of-range values; `validate` reports every finding as a `SpecError` naming th
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any, Callable, ClassVar, TypeVar
 
@@ -34,6 +35,11 @@ NonNegativeNumber = Annotated[float, Strict(), AllowInfNan(False), Field(ge=0)]
 Vec2 = Annotated[list[Number], Field(min_length=2, max_length=2)]
 Vec3 = Annotated[list[Number], Field(min_length=3, max_length=3)]
 Vec4 = Annotated[list[Number], Field(min_length=4, max_length=4)]
+
+def is_number(value) -> bool:
+    """A finite int or float as YAML gives it (not a boolean): for checks that run before a field's type."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
 
 M = TypeVar("M", bound=BaseModel)
 # libyaml's scanner and parser under PyYAML's safe constructor: the same data as yaml.safe_load, 7x less CPU

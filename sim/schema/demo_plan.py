@@ -18,7 +18,7 @@ from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
 
 from sim.scene.parts import parts_aabb
 
-from .base import Bool, CatalogModel, Int, Name, Number
+from .base import Bool, CatalogModel, Int, Name, Number, is_number
 from .plan_via import VIA_TIMES_RANGE, check_via
 
 TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
@@ -44,14 +44,10 @@ POUR_DEFAULT_GRASP = SIDE_GRASP
 TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
 
 
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-
-
 def _vector(lengths: tuple[int, ...], words: str):
     """A list of finite numbers of one of these lengths; anything else is refused in ``words`` as a whole."""
     def check(value):
-        if not isinstance(value, list) or len(value) not in lengths or not all(map(_is_number, value)):
+        if not isinstance(value, list) or len(value) not in lengths or not all(map(is_number, value)):
             raise ValueError(words)
         return value
     return Annotated[list[Number], BeforeValidator(check)]
@@ -172,7 +168,7 @@ class GraspFields(CatalogModel):
         words = f"{GRASP_YAW_ACROSS!r} or degrees in [-180, 180]" if cls.across else "degrees in [-180, 180]"
         if yaw == GRASP_YAW_ACROSS and cls.across:
             return yaw
-        if not _is_number(yaw) or not -180.0 <= yaw <= 180.0:
+        if not is_number(yaw) or not -180.0 <= yaw <= 180.0:
             raise ValueError(words)
         return yaw
 
@@ -253,7 +249,7 @@ class PickStep(PlanStep, GraspFields):
     def _an_axis_from_above(cls, axis, info: ValidationInfo):
         if info.data.get("place_from") == PLACE_FROM_FRONT:
             raise ValueError(f"no place_axis with place_from: {PLACE_FROM_FRONT} (slid in level, as held)")
-        if isinstance(axis, list) and all(map(_is_number, axis)) and math.hypot(*axis) < 1e-9:
+        if isinstance(axis, list) and all(map(is_number, axis)) and math.hypot(*axis) < 1e-9:
             raise ValueError("a non-zero [x, y, z] in the object's frame")
         return axis
 
@@ -305,7 +301,7 @@ class DragStep(PlanStep):
         if container is None:            # refused above already
             return depth
         height = 2 * _scope(info).objects[container].interior_half_extents[2]
-        if not _is_number(depth) or not 0.0 < depth < height:
+        if not is_number(depth) or not 0.0 < depth < height:
             raise ValueError(f"metres below the rim in (0, {height:.3f})")
         return depth
 
@@ -399,7 +395,7 @@ class TurnStep(PlanStep):
         if link is None:                 # refused above already
             return angle
         lo, hi = _hinges(info)[link]
-        if not _is_number(angle) or not lo <= angle <= hi:
+        if not is_number(angle) or not lo <= angle <= hi:
             raise ValueError(f"an angle in rad within the joint range [{lo:g}, {hi:g}]")
         return angle
 
@@ -474,7 +470,7 @@ class CarryStep(PlanStep):
         if carried is None:
             return height
         half_z = float(_scope(info).objects[carried].half_extents[2])
-        if not _is_number(height) or abs(height) > half_z:
+        if not is_number(height) or abs(height) > half_z:
             raise ValueError(f"metres from the object's centre in [{-half_z:g}, {half_z:g}]")
         return height
 

@@ -9,14 +9,10 @@ task's objects as validation context (sim/schema/demo_plan.py).
 
 from __future__ import annotations
 
-import math
+from .base import is_number
 
 VIA_KINDS = ("inside", "over")      # into a container's cavity, below its rim; above an object, clear of its top
 VIA_TIMES_RANGE = (1, 10)
-
-
-def _number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
 def check_via(via, *, picked: str | None, objects: dict) -> list[dict]:
@@ -37,6 +33,6 @@ def check_via(via, *, picked: str | None, objects: dict) -> list[dict]:
         if stop[kind] not in allowed:
             raise ValueError(f"stop {i}: {kind}: one of {allowed}, got {stop[kind]!r}")
         offset = stop.get("offset", [0.0, 0.0])
-        if not isinstance(offset, list) or len(offset) not in (2, 3) or not all(map(_number, offset)):
+        if not isinstance(offset, list) or len(offset) not in (2, 3) or not all(map(is_number, offset)):
             raise ValueError(f"stop {i}: offset: [dx, dy] or [dx, dy, dz] in metres, got {offset!r}")
     return via

@@ -25,7 +25,7 @@ import numpy as np
 from sim.demo_plan import TABLE_TARGET
 from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.operator import PlanningOperator
-from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M, RELEASE_GAP_M, lower_and_release, place_offset
+from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M, RELEASE_GAP_M, lower_and_release, place_offset, planned_top
 
 DOWN = -UP
 CLEAR_M = 0.03          # turned and above its place, the object's lower end this far above the target's top
@@ -96,8 +96,8 @@ def carry_and_place_axis_down(op: PlanningOperator, data: mujoco.MjData, item: d
     if item["place"] == TABLE_TARGET:
         xy, top = at[:2], op.scene.table_height
     else:
-        target = op.planned_place(data, item["place"], tl.end)[0]
-        xy, top = target[:2] + at[:2], float(target[2] + task.objects[item["place"]].half_extents[2])
+        target, top = planned_top(op, data, item["place"], tl.end)
+        xy = target[:2] + at[:2]
     release = np.array([*xy, top + at[2] + half + RELEASE_GAP_M])    # the object's centre as it is let go
     rise = max(0.0, -at[2]) + CLEAR_M       # lowered from where its lower end is CLEAR_M above the top
     q_lift = side["kin"].ik(tl.frames[-1].pos, tl.frames[-1].quat, side["q"]).q

@@ -15,13 +15,11 @@ import mujoco
 import numpy as np
 
 from sim.errors import SpecError
-from sim.scene.reach import PALM_DOWN
-from teleop.operator_motion import DURATIONS, FORWARD, UP, SideTimeline, axis_rotation, pitched_palm_down, quat, yawed
+from teleop.operator_motion import DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
 from teleop.plan_steps.front_place import CEILING_GAP_M, OUTSIDE_M, SLIDE_STEPS, side_opening
 from teleop.plan_steps.operator import PlanningOperator
-from teleop.plan_steps.part_pinch import part_width
-from teleop.plan_steps.pick_place import (CLOSED, PALM_CLEARANCE_M, PALM_NORMAL, SIDE_GRASP_IN_M, WALL, approach_pitch,
-                                         grasp_point, side_roll)
+from teleop.plan_steps.pick_place import (CLOSED, PALM_NORMAL, SIDE_GRASP_IN_M, WALL, approach_pitch, grasp_point,
+                                         side_grasp_offset, side_roll, turned_about_fingers)
 from teleop.transit import bounding_box_points, hand_outline
 
 TAKE_LIFT_M = 0.02      # lifted this far off the cavity floor before it slides out (less under a low ceiling)
@@ -33,16 +31,9 @@ def side_hold(op: PlanningOperator, data: mujoco.MjData, hand: str, name: str, r
     closes (teleop/plan_steps/pick_place.py): the hand rotation (world) and the object centre's offset
     from the wrist site (world), the palm just short of the part there. The object's shape is read where
     it is now; the offset holds wherever it is, turned the same way."""
-    side = op.sides[hand]
-    hand_rot = pitched_palm_down(pitch_deg)
-    fingers = hand_rot @ (PALM_DOWN.T @ FORWARD)
-    hand_rot = yawed(axis_rotation(fingers, np.radians(roll_deg)) @ hand_rot, np.radians(yaw_deg))
-    body = op.scene.object_body_ids[name]
-    at = data.xmat[body].reshape(3, 3) @ np.asarray(point, float)
-    width = part_width(op.scene.model, data, body, op.object_pos(data, name) + at, hand_rot[:, 1])
-    clear = 0.5 * width + PALM_CLEARANCE_M
-    cx, cy, cz = side["grasp_centre"]
-    return hand_rot, hand_rot @ np.array([cx, max(cy, clear), cz]) - at
+    hand_rot = yawed(turned_about_fingers(pitched_palm_down(pitch_deg), roll_deg), np.radians(yaw_deg))
+    at = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3) @ np.asarray(point, float)
+    return hand_rot, side_grasp_offset(op, data, op.sides[hand], name, hand_rot, at)
 
 
 def container_of(op: PlanningOperator, data: mujoco.MjData, name: str, step: int) -> str:

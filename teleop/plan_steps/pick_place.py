@@ -178,6 +178,22 @@ def across_turn(closing: np.ndarray, body_rot: np.ndarray, half_extents) -> floa
     return float((turn + np.pi / 2) % np.pi - np.pi / 2)     # a closing direction has no sign
 
 
+def turned_about_fingers(hand_rot: np.ndarray, roll_deg: float) -> np.ndarray:
+    """The hand turned ``roll_deg`` about its fingers (a side grasp's roll: 90, thumb up)."""
+    fingers = hand_rot @ (PALM_DOWN.T @ FORWARD)
+    return axis_rotation(fingers, np.radians(roll_deg)) @ hand_rot
+
+
+def side_grasp_offset(op: PlanningOperator, data: mujoco.MjData, side: dict, name: str, hand_rot: np.ndarray,
+                      at: np.ndarray) -> np.ndarray:
+    """The object centre's offset from the wrist site (world) for a palm grasp turned ``hand_rot`` that moved
+    in level: the palm just short of the part at ``at`` (world, from the object's centre)."""
+    clear = 0.5 * part_width(op.scene.model, data, op.scene.object_body_ids[name], op.object_pos(data, name) + at,
+                             hand_rot[:, 1]) + PALM_CLEARANCE_M
+    cx, cy, cz = side["grasp_centre"]
+    return hand_rot @ np.array([cx, max(cy, clear), cz]) - at
+
+
 def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
                    roll_deg: float = 0.0, side_in_m: float = 0.0) -> np.ndarray:
     """Append the hand's approach to object ``name``, descent, closing and lift (the step's `grasp`
@@ -196,8 +212,7 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
     else:
         hand_rot = pitched_palm_down(approach_pitch(item))
     if roll_deg:
-        fingers = hand_rot @ (PALM_DOWN.T @ FORWARD)
-        hand_rot = axis_rotation(fingers, np.radians(roll_deg)) @ hand_rot
+        hand_rot = turned_about_fingers(hand_rot, roll_deg)
     body_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3)
     if "grasp_yaw" in item:
         hand_rot = yawed(hand_rot, grasp_yaw(item, hand_rot, side["hand"], body_rot, obj.half_extents, pinch))
@@ -217,18 +232,18 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre) - at
         closing = [(DURATIONS["close"] + DURATIONS["close_late"], side["pinch_close"], None)]
     else:
-        # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
-        cx, cy, cz = side["grasp_centre"]
-        if roll_deg:        # the object's depth along the palm normal, rather than its height
-            half_z = float(np.abs(body_rot.T @ hand_rot[:, 1]) @ obj.half_extents)
         at = body_rot @ grasp_point(item)
-        # the palm clears the object's top, measured from the grasped point rather than its centre
-        # the hand closes on the grasp point; the object's centre sits `at` back from it
-        clear = half_z - at[2] + PALM_CLEARANCE_M
         if side_in_m:       # moved in level: the palm stops just short of the part at the grasp point
-            clear = 0.5 * part_width(op.scene.model, data, op.scene.object_body_ids[name],
-                                     op.object_pos(data, name) + at, hand_rot[:, 1]) + PALM_CLEARANCE_M
-        offset = hand_rot @ np.array([cx, max(cy, clear), cz]) - at
+            offset = side_grasp_offset(op, data, side, name, hand_rot, at)
+        else:
+            # object centre in the wrist-site frame: the hand's grasp centre, lifted clear of the palm
+            cx, cy, cz = side["grasp_centre"]
+            if roll_deg:        # the object's depth along the palm normal, rather than its height
+                half_z = float(np.abs(body_rot.T @ hand_rot[:, 1]) @ obj.half_extents)
+            # the palm clears the object's top, measured from the grasped point rather than its centre
+            # the hand closes on the grasp point; the object's centre sits `at` back from it
+            clear = half_z - at[2] + PALM_CLEARANCE_M
+            offset = hand_rot @ np.array([cx, max(cy, clear), cz]) - at
         closing = [(DURATIONS["close"], op.power(side, WALL), None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
         ready = open_
     hand_quat = quat(hand_rot)
@@ -252,6 +267,12 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
     tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * UP)
     op.look_again(side, name, data, reach, len(tl.frames))
     return offset
+
+
+def planned_top(op: PlanningOperator, data: mujoco.MjData, name: str, step: int) -> tuple[np.ndarray, float]:
+    """Where object ``name`` is at control step ``step`` as the plan leaves it (its centre), and its top's height."""
+    pos = op.planned_place(data, name, step)[0]
+    return pos, float(pos[2] + op.scene.task.objects[name].half_extents[2])
 
 
 def place_centre(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str) -> np.ndarray:

@@ -27,7 +27,7 @@ from teleop.operator_motion import DURATIONS, LIFT_HEIGHT_M, NOT_IN_HAND_M, UP, 
 from teleop.plan_steps.held import keep, take
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import (PALM_NORMAL, SIDE_GRASP_ROLL_DEG, grasp_and_lift, lower_and_release,
-                                         place_centre, rest_centre)
+                                         place_centre, planned_top, rest_centre)
 from teleop.transit import CLEARANCE_M, hand_outline
 
 
@@ -127,7 +127,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     if target in op.scene.task.objects:
         # the target's top where earlier steps leave it (the operator re-aims in xy when it sets off,
         # but heights come from the plan)
-        top = float(op.planned_place(data, target, tl.end)[0][2] + op.scene.task.objects[target].half_extents[2])
+        top = planned_top(op, data, target, tl.end)[1]
         aim = np.array([*aim_point(op, data, target), top + MOUTH_ABOVE_RIM_M])
     else:       # a task point: the mouth straight above it, as high above it as above a rim
         point = point_world(op, target)

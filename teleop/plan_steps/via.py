@@ -33,7 +33,7 @@ from teleop.plan_steps import held
 from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import (SIDE_GRASP_IN_M, carry_and_place, carry_height, grasp_and_lift,
-                                         place_centre, side_roll)
+                                         place_centre, planned_top, side_roll)
 from teleop.plan_steps.pour import upright_in_hand
 
 VIA_INSIDE_DEPTH_M = 0.025      # `inside`: the via point this far below the container's rim (a ladle's bowl dipped in)
@@ -48,19 +48,13 @@ def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
 
 
-def _top(op: PlanningOperator, data: mujoco.MjData, name: str, step: int) -> tuple[np.ndarray, float]:
-    """Where object ``name`` is at control step ``step`` as planned (its centre), and its top's height."""
-    pos = op.planned_place(data, name, step)[0]
-    return pos, float(pos[2] + op.scene.task.objects[name].half_extents[2])
-
-
 def stop_point(op: PlanningOperator, data: mujoco.MjData, stop: dict, step: int,
                below: float) -> tuple[str, np.ndarray]:
     """The stop's object and where the via point goes (world), ``below``: how far the carried object's
     lowest point is under the via point as held."""
     kind = "inside" if "inside" in stop else "over"
     name = stop[kind]
-    pos, top = _top(op, data, name, step)
+    pos, top = planned_top(op, data, name, step)
     if kind == "inside":        # over the cavity's centre (its box may sit off the object's centre), below the rim
         obj = op.scene.task.objects[name]
         rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3)
@@ -91,7 +85,7 @@ def through_stops(op: PlanningOperator, data: mujoco.MjData, item: dict, name: s
     point = rotation @ np.asarray(item.get("via_point", [0.0, 0.0, 0.0]), float)    # centre -> via point
     below = float(point[2] - (_corners(lo, hi) @ rotation.T)[:, 2].min())
     stops = [stop_point(op, data, stop, tl.end, below) for stop in item["via"]]
-    tops = [_top(op, data, stop_name, tl.end)[1] for stop_name, _ in stops]
+    tops = [planned_top(op, data, stop_name, tl.end)[1] for stop_name, _ in stops]
     # the travel height: the carried object's lowest point clear of every stop's top
     travel = max(tops) + VIA_OVER_CLEARANCE_M + below - point[2] - offset[2]
     travel = max(travel, float(tl.frames[-1].pos[2]))
@@ -105,7 +99,7 @@ def through_stops(op: PlanningOperator, data: mujoco.MjData, item: dict, name: s
             tl.add(VIA_DURATIONS["down"], pos=wrist)
             tl.add(VIA_DURATIONS["stay"])
             tl.add(VIA_DURATIONS["up"], pos=np.array([wrist[0], wrist[1], travel]))
-            planned_xy = _top(op, data, stop_name, tl.end)[0][:2]
+            planned_xy = planned_top(op, data, stop_name, tl.end)[0][:2]
             op.on_frame_end(side, first - 1, follow(op, side, stop_name, planned_xy, slice(first, len(tl.frames))))
 
 
