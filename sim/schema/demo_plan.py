@@ -14,12 +14,11 @@ from __future__ import annotations
 import math
 from typing import Annotated, ClassVar, Literal
 
-from pydantic import BeforeValidator, Field, ValidationInfo, field_validator
+from pydantic import BeforeValidator, Field, ValidationInfo, field_validator, model_validator
 
 from sim.scene.parts import parts_aabb
 
 from .base import Bool, CatalogModel, Int, Name, Number, is_number
-from .plan_via import VIA_TIMES_RANGE, check_via
 
 TABLE_TARGET = "table"      # place: table puts an object down at place_offset [x, y] of the table top (centre 0, 0)
 HANDS = ("left", "right")
@@ -42,6 +41,8 @@ SIDE_ROLL_RANGE_DEG = (60.0, 135.0)   # grasp_roll_deg of a side grasp: 90 thumb
 POUR_GRASPS = (SIDE_GRASP, *PLAN_GRASPS)  # side: palm against a tall bottle, thumb up (a person's hold)
 POUR_DEFAULT_GRASP = SIDE_GRASP
 TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
+VIA_KINDS = ("inside", "over")      # a pick's via stops: into a container's cavity, below its rim; above an object
+VIA_TIMES_RANGE = (1, 10)
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -106,6 +107,36 @@ def _front_container(place: str, info: ValidationInfo, *, but: tuple = ()) -> st
 def _hinges(info: ValidationInfo) -> dict:
     return {f"{n}/{link.name}": link.joint.range for n, o in _scope(info).objects.items() for link in o.links
             if link.joint.type == "hinge"}
+
+
+class ViaStop(CatalogModel):
+    """One of a pick's `via` stops (teleop/plan_steps/via.py): {inside: <container>} takes the carried
+    object's via point into the container's cavity, below its rim; {over: <object>} above the object, clear
+    of its top. `offset` [dx, dy] or [dx, dy, dz] (metres, world) shifts the spot."""
+
+    keys_label: ClassVar[str] = "a field of a via stop"
+
+    inside: Name = None
+    over: Name = None
+    offset: PlaceOffset = None
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_kind(cls, stop):
+        if isinstance(stop, dict) and sum(kind in stop for kind in VIA_KINDS) != 1:
+            raise ValueError("exactly one of inside: <container> or over: <object>")
+        return stop
+
+    @field_validator("inside", mode="before")
+    @classmethod
+    def _a_container(cls, name, info: ValidationInfo) -> str:
+        containers = _containers(_scope(info))
+        return _one_of(name, containers, f"a container from {containers}")
+
+    @field_validator("over", mode="before")
+    @classmethod
+    def _an_object(cls, name, info: ValidationInfo) -> str:
+        return _object(name, info)
 
 
 class PlanStep(CatalogModel):
@@ -208,7 +239,7 @@ class PickStep(PlanStep, GraspFields):
                                    description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
     place_axis: ObjectAxis = None           # turned on the way to point straight down (teleop/plan_steps/axis_place.py)
     hold: Bool = False                      # kept in the hand over `place` for its next step (plan_steps/via.py)
-    via: list[dict] = None                  # waypoints on the way to `place`, checked by sim/schema/plan_via.py
+    via: list[ViaStop] = Field(None, min_length=1)  # waypoints on the way to `place`
     via_times: Int = Field(None, ge=VIA_TIMES_RANGE[0], le=VIA_TIMES_RANGE[1],
                            description=f"a whole number of rounds in [{VIA_TIMES_RANGE[0]}, {VIA_TIMES_RANGE[1]}]")
     via_point: ObjectPoint = None           # the carried object's point that goes through the stops (a ladle's bowl)
@@ -220,10 +251,14 @@ class PickStep(PlanStep, GraspFields):
             raise ValueError(f"no hold: true with place_from: {PLACE_FROM_FRONT} (held over the place, not slid in)")
         return hold
 
-    @field_validator("via", mode="before")
+    @field_validator("via")
     @classmethod
-    def _stops(cls, via, info: ValidationInfo):
-        return check_via(via, picked=info.data.get("pick"), objects=_scope(info).objects)
+    def _not_through_itself(cls, via: list[ViaStop], info: ValidationInfo):
+        picked = info.data.get("pick")
+        for i, stop in enumerate(via):
+            if picked in (stop.inside, stop.over):
+                raise ValueError(f"stops at other objects than {picked!r}, the one carried (stop {i})")
+        return via
 
     @field_validator("via_times", "via_point", mode="before")
     @classmethod

@@ -35,11 +35,14 @@ def test_via_and_hold_are_pick_fields(tmp_path):
 
 
 @pytest.mark.parametrize(("step", "expected"), [
-    ({**SCOOP, "via": [{"inside": "stove"}]}, r"via'.*stop 0: inside: one of \['bowl', 'pot'\]"),   # no cavity
-    ({**SCOOP, "via": [{"over": "ladle"}]}, r"via'.*stop 0: over: one of \['bowl', 'pot', 'stove'\]"),
-    ({**SCOOP, "via": [{"inside": "pot", "over": "bowl"}]}, r"via'.*a non-empty list of stops"),
-    ({**SCOOP, "via": []}, r"via'.*a non-empty list of stops"),
-    ({**SCOOP, "via": [{"over": "bowl", "offset": [0.1]}]}, r"via'.*stop 0: offset: \[dx, dy\] or \[dx, dy, dz\]"),
+    ({**SCOOP, "via": [{"inside": "stove"}]}, r"via\[0\].inside': expected a container from \['bowl', 'ladle', 'pot'\]"),
+    ({**SCOOP, "via": [{"over": "ladle"}]}, r"via': expected stops at other objects than 'ladle', the one carried"),
+    ({**SCOOP, "via": [{"over": "plate"}]}, r"via\[0\].over': expected an object from \['bowl', 'ladle', 'pot', 'stove'\]"),
+    ({**SCOOP, "via": [{"inside": "pot", "over": "bowl"}]}, r"via\[0\]': expected exactly one of inside"),
+    ({**SCOOP, "via": [{"offset": [0.1, 0.0]}]}, r"via\[0\]': expected exactly one of inside"),
+    ({**SCOOP, "via": [{"over": "bowl", "offest": [0.1, 0.0]}]}, r"via\[0\].offest': expected a field of a via stop"),
+    ({**SCOOP, "via": []}, r"via': expected at least 1 item"),
+    ({**SCOOP, "via": [{"over": "bowl", "offset": [0.1]}]}, r"via\[0\].offset': expected \[dx, dy\] or \[dx, dy, dz\]"),
     ({k: v for k, v in SCOOP.items() if k != "via"}, r"via_times'.*no via_times without via"),
     ({**SCOOP, "via_times": 0}, r"via_times'.*a whole number of rounds in \[1, 10\]"),
 ])
