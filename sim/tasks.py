@@ -4,8 +4,8 @@ A task declares its table, its objects (primitives and generated shapes built by
 files; fixed or free, with articulated links), where they start (a pose or a placement zone), an
 optional scripted demonstration plan (sim/demo_plan.py) and its `metrics` block, which the shared
 evaluator compiles at load time. No task needs Python of its own. The file's keys, types and ranges
-(masses, frictions, densities: `sim.scene.fields`) are checked by its schema (`sim.schema.task`); this
-module builds the objects and checks what refers across them.
+are checked by its schema (`sim.schema.task`; an object's geometry, joints and physical bounds:
+`sim.schema.object_parts`); this module builds the objects and checks what refers across them.
 """
 
 from __future__ import annotations
@@ -21,10 +21,10 @@ from sim.errors import SpecError
 from evaluation import EpisodeEvaluator, TaskContext, TaskSpecError
 from evaluation.state import ObjectInfo
 from sim.registry import Setting, catalog_path, load_yaml, names
-from sim.scene.articulated import LinkSpec, parse_links
-from sim.scene.fields import MASS_RANGE_KG
-from sim.scene.parts import Cavity, Part, parse_part, parse_parts, parts_aabb
+from sim.scene.articulated import LinkSpec, build_links
+from sim.scene.parts import Cavity, Part, build_part, build_parts, parts_aabb
 from sim.schema import validate
+from sim.schema.object_parts import MASS_RANGE_KG, PartEntry
 from sim.schema.task import TABLE_HEIGHT_RANGE_M, TABLE_THICKNESS_RANGE_M, Table, TaskFile, TaskObject  # noqa: F401
 
 DEFAULT_TABLE_HEIGHT = 0.75      # the schema's default (sim.schema.task.Table)
@@ -116,15 +116,13 @@ class TaskSpec:
         return [j for o in self.objects.values() for j in o.joint_names]
 
 
-def _geometry(path, where, raw) -> tuple[tuple[Part, ...], Cavity | None]:
+def _geometry(path, where, obj: TaskObject) -> tuple[tuple[Part, ...], Cavity | None]:
     """shape + size (one primitive), mesh (one mesh file) or parts (primitives, generated shapes
     and meshes); the schema has checked that exactly one is given."""
-    if "parts" in raw:
-        return parse_parts(path, f"{where}.parts", raw["parts"])
-    if "mesh" in raw:
-        parts, _ = parse_part(path, where, {"mesh": raw["mesh"]})
-        return tuple(parts), None
-    parts, _ = parse_part(path, where, {"shape": raw["shape"], "size": raw["size"]})
+    if obj.parts is not None:
+        return build_parts(path, f"{where}.parts", obj.parts)
+    entry = PartEntry(mesh=obj.mesh) if obj.mesh is not None else PartEntry(shape=obj.shape, size=obj.size)
+    parts, _ = build_part(path, where, entry)
     return tuple(parts), None
 
 
@@ -143,7 +141,7 @@ def _mass(path, where, obj: TaskObject, parts) -> float:
 def _parse_object(path, name, raw: dict, obj: TaskObject, zones, earlier) -> ObjectSpec:
     """One object: the schema checked its keys, types and ranges; here its geometry and references."""
     where = f"objects.{name}"
-    parts, cavity = _geometry(path, where, raw)
+    parts, cavity = _geometry(path, where, obj)
     lo, hi = parts_aabb(parts)
     if np.abs((lo + hi) / 2).max() > CENTRE_TOLERANCE_M:
         raise SpecError(path, f"{where}.parts", "parts centred on the object frame (the evaluator's box "
@@ -174,7 +172,7 @@ def _parse_object(path, name, raw: dict, obj: TaskObject, zones, earlier) -> Obj
         interior_half_extents=interior,
         interior_offset=offset,
         parts=parts,
-        links=parse_links(path, where, raw),
+        links=build_links(path, where, obj),
         base=obj.base,
         mouth_axis=tuple(obj.mouth_axis) if obj.mouth_axis is not None else None,
         on=on,

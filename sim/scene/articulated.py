@@ -30,16 +30,12 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from sim.errors import SpecError
-from sim.scene.fields import MASS_RANGE_KG, num_list, number
+from sim.schema.object_parts import LinkBody
+from sim.schema.task import TaskObject
 from sim.scene.geoms import add_part_geoms
-from sim.scene.parts import Part, euler_quat, parse_parts
+from sim.scene.parts import Part, build_parts, euler_quat
 
 JOINT_TYPES = {"hinge": mujoco.mjtJoint.mjJNT_HINGE, "slide": mujoco.mjtJoint.mjJNT_SLIDE}
-JOINT_KEYS = ("type", "axis", "range", "damping", "stiffness", "springref", "frictionloss", "armature", "initial")
-LINK_KEYS = ("pos", "euler_deg", "joint", "parts", "mass", "rgba")
-KEY_ROW_KEYS = ("names", "origin", "pitch", "euler_deg", "joint", "parts", "mass", "rgba")
-DEFAULT_ARMATURE = 1e-4   # a little rotor inertia keeps light links stable at the 2 ms step
 LIMIT_SOLREF = [0.004, 1.0]   # stiff stops: a preloaded key rests within ~0.1 mm of its limit
 
 
@@ -67,81 +63,27 @@ class LinkSpec:
     rgba: tuple[float, float, float, float] | None
 
 
-def parse_joint(path, field: str, raw) -> JointSpec:
-    if not isinstance(raw, dict):
-        raise SpecError(path, field, f"a mapping with keys {list(JOINT_KEYS)}", raw)
-    for key in raw:
-        if key not in JOINT_KEYS:
-            raise SpecError(path, f"{field}.{key}", f"a joint key {list(JOINT_KEYS)}")
-    kind = raw.get("type")
-    if kind not in JOINT_TYPES:
-        raise SpecError(path, f"{field}.type", f"one of {sorted(JOINT_TYPES)}", kind)
-    axis = np.asarray(num_list(path, f"{field}.axis", raw.get("axis"), 3))
-    if not np.linalg.norm(axis) > 0:
-        raise SpecError(path, f"{field}.axis", "a non-zero axis", raw.get("axis"))
-    lo, hi = num_list(path, f"{field}.range", raw.get("range"), 2)
-    if not lo < hi:
-        raise SpecError(path, f"{field}.range", "[low, high] with low < high", raw.get("range"))
-
-    def value(key: str, default: float, low: float | None = 0.0) -> float:
-        return number(path, f"{field}.{key}", raw.get(key, default), low)
-
-    initial = value("initial", 0.0, low=None)
-    if not lo <= initial <= hi:
-        raise SpecError(path, f"{field}.initial", f"a value within the range [{lo}, {hi}]", initial)
-    return JointSpec(
-        type=kind, axis=tuple((axis / np.linalg.norm(axis)).tolist()), range=(lo, hi),
-        damping=value("damping", 0.1), stiffness=value("stiffness", 0.0), springref=value("springref", 0.0, low=None),
-        frictionloss=value("frictionloss", 0.0), armature=value("armature", DEFAULT_ARMATURE), initial=initial)
+def _link(path, field: str, name: str, body: LinkBody, pos) -> LinkSpec:
+    """A link (or one key of a row) from its checked schema; ``path`` and ``field`` name a mesh part's
+    file that cannot be read."""
+    j = body.joint
+    axis = np.asarray(j.axis, float)
+    joint = JointSpec(type=j.type, axis=tuple((axis / np.linalg.norm(axis)).tolist()),
+                      range=(float(j.range[0]), float(j.range[1])), damping=j.damping, stiffness=j.stiffness,
+                      springref=j.springref, frictionloss=j.frictionloss, armature=j.armature, initial=j.initial)
+    parts, _ = build_parts(path, f"{field}.parts", body.parts)
+    return LinkSpec(name=name, pos=tuple(float(v) for v in pos), quat=euler_quat(body.euler_deg), joint=joint,
+                    parts=parts, mass=body.mass,
+                    rgba=tuple(float(v) for v in body.rgba) if body.rgba is not None else None)
 
 
-def _link(path, field, name, raw, pos, keys) -> LinkSpec:
-    for key in raw:
-        if key not in keys:
-            raise SpecError(path, f"{field}.{key}", f"a key of {list(keys)}")
-    if "joint" not in raw:
-        raise SpecError(path, f"{field}.joint", "a joint {type, axis, range, ...}")
-    parts, _ = parse_parts(path, f"{field}.parts", raw.get("parts"))
-    mass = number(path, f"{field}.mass", raw.get("mass"), *MASS_RANGE_KG, unit="kg")
-    return LinkSpec(name=name, pos=pos, quat=euler_quat(num_list(path, f"{field}.euler_deg",
-                                                                 raw.get("euler_deg", [0, 0, 0]), 3)),
-                    joint=parse_joint(path, f"{field}.joint", raw["joint"]), parts=parts, mass=mass,
-                    rgba=num_list(path, f"{field}.rgba", raw["rgba"], 4) if "rgba" in raw else None)
-
-
-def parse_links(path, field: str, raw: dict) -> tuple[LinkSpec, ...]:
-    """An object's `links` mapping and `key_rows` list, in declaration order (links first)."""
-    links: list[LinkSpec] = []
-    declared = raw.get("links") or {}
-    if not isinstance(declared, dict):
-        raise SpecError(path, f"{field}.links", "a mapping of link name -> link", declared)
-    for name, body in declared.items():
-        where = f"{field}.links.{name}"
-        if not isinstance(body, dict):
-            raise SpecError(path, where, "a mapping", body)
-        links.append(_link(path, where, str(name), body, num_list(path, f"{where}.pos", body.get("pos", [0, 0, 0]), 3),
-                           LINK_KEYS))
-    rows = raw.get("key_rows") or []
-    if not isinstance(rows, list):
-        raise SpecError(path, f"{field}.key_rows", "a list of key rows", rows)
-    for i, row in enumerate(rows):
-        where = f"{field}.key_rows[{i}]"
-        if not isinstance(row, dict):
-            raise SpecError(path, where, "a mapping", row)
-        names = row.get("names")
-        if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-            raise SpecError(path, f"{where}.names", "a non-empty list of key names", names)
-        origin = np.asarray(num_list(path, f"{where}.origin", row.get("origin"), 3))
-        pitch = np.asarray(num_list(path, f"{where}.pitch", row.get("pitch", [0, 0, 0]), 3))
-        body = {k: v for k, v in row.items() if k not in ("names", "origin", "pitch")}
-        for k, key in enumerate(names):
-            pos = tuple((origin + k * pitch).round(6).tolist())
-            links.append(_link(path, where, key, body, pos, KEY_ROW_KEYS))
-    seen: set[str] = set()
-    for link in links:
-        if link.name in seen or "/" in link.name:
-            raise SpecError(path, f"{field}.links", "unique link and key names without '/'", link.name)
-        seen.add(link.name)
+def build_links(path, field: str, obj: TaskObject) -> tuple[LinkSpec, ...]:
+    """An object's `links` and `key_rows` (checked by their schema), in declaration order (links first)."""
+    links = [_link(path, f"{field}.links.{name}", name, body, body.pos) for name, body in (obj.links or {}).items()]
+    for i, row in enumerate(obj.key_rows or []):
+        origin, pitch = np.asarray(row.origin, float), np.asarray(row.pitch, float)
+        for k, key in enumerate(row.names):
+            links.append(_link(path, f"{field}.key_rows[{i}]", key, row, (origin + k * pitch).round(6).tolist()))
     return tuple(links)
 
 

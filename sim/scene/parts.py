@@ -20,8 +20,7 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
-from sim.errors import SpecError
-from sim.scene.fields import num_list, number
+from sim.schema.object_parts import PartEntry
 from sim.scene.mesh_files import MeshRef, load_hull, parse_mesh
 
 GEOM_TYPES = {
@@ -29,11 +28,6 @@ GEOM_TYPES = {
     "sphere": mujoco.mjtGeom.mjGEOM_SPHERE, "ellipsoid": mujoco.mjtGeom.mjGEOM_ELLIPSOID,
     "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE, "mesh": mujoco.mjtGeom.mjGEOM_MESH,
 }
-SHAPE_SIZE_LEN = {"box": 3, "cylinder": 2, "sphere": 1, "ellipsoid": 3, "capsule": 2}
-GENERATORS = ("open_box", "open_cylinder")
-MIN_SEGMENTS = 6
-OPEN_SIDES = ("+x", "-x", "+y", "-y", "+z", "-z")
-PART_KEYS = ("shape", "size", "pos", "euler_deg", "rgba")
 
 
 @dataclass(frozen=True)
@@ -155,70 +149,41 @@ def _transform(parts: list[Part], pos, quat) -> list[Part]:
     return out
 
 
-def _keys(path, field: str, raw: dict, allowed, what: str) -> None:
-    for key in raw:
-        if key not in allowed:
-            raise SpecError(path, f"{field}.{key}", f"{what} {list(allowed)}")
+def _generated(entry: PartEntry) -> tuple[list[Part], Cavity]:
+    """An open box or open cylinder in its own frame."""
+    if entry.open_box is not None:
+        box = entry.open_box
+        return open_box(box.size, box.wall, box.open)
+    cylinder = entry.open_cylinder
+    return open_cylinder(cylinder.size, cylinder.wall, cylinder.segments)
 
 
-def _generated(path, field: str, kind: str, args) -> tuple[list[Part], Cavity]:
-    """An open box or open cylinder from its arguments, in its own frame."""
-    if not isinstance(args, dict):
-        raise SpecError(path, field, "a mapping of shape arguments", args)
-    wall = number(path, f"{field}.wall", args.get("wall"), 0.0, low_open=True, unit="m")
-    size = num_list(path, f"{field}.size", args.get("size"), 3 if kind == "open_box" else 2, positive=True)
-    if 2 * wall >= min(size):
-        raise SpecError(path, f"{field}.wall", f"less than half the smallest size ({min(size)})", wall)
-    if kind == "open_box":
-        side = args.get("open", "+z")
-        if side not in OPEN_SIDES:
-            raise SpecError(path, f"{field}.open", f"one of {list(OPEN_SIDES)}", side)
-        return open_box(size, wall, side)
-    segments = number(path, f"{field}.segments", args.get("segments", 16), MIN_SEGMENTS, integer=True)
-    return open_cylinder(size, wall, segments)
-
-
-def parse_part(path, field: str, raw) -> tuple[list[Part], Cavity | None]:
-    """One entry of a `parts` list: a primitive, a generated shape (several primitives) or a mesh."""
-    if not isinstance(raw, dict):
-        raise SpecError(path, field, f"a mapping: a primitive {{shape, size, ...}}, a mesh or one of "
-                        f"{list(GENERATORS)}", raw)
-    placement = ("pos", "euler_deg", "rgba")
-    pos = num_list(path, f"{field}.pos", raw.get("pos", [0, 0, 0]), 3)
-    quat = euler_quat(num_list(path, f"{field}.euler_deg", raw.get("euler_deg", [0, 0, 0]), 3))
-    rgba = num_list(path, f"{field}.rgba", raw["rgba"], 4) if "rgba" in raw else None
-    generated = [k for k in raw if k in GENERATORS]
-    if generated:
-        kind = generated[0]
-        _keys(path, field, raw, (kind, *placement), "a key of a generated part")
-        parts, cavity = _generated(path, f"{field}.{kind}", kind, raw[kind])
+def build_part(path, field: str, entry: PartEntry) -> tuple[list[Part], Cavity | None]:
+    """One entry of a `parts` list (checked by its schema): a primitive, a generated shape (several
+    primitives) or a mesh; ``path`` and ``field`` name a mesh file that cannot be read."""
+    pos = tuple(float(v) for v in entry.pos)
+    quat = euler_quat(entry.euler_deg)
+    rgba = tuple(float(v) for v in entry.rgba) if entry.rgba is not None else None
+    if entry.open_box is not None or entry.open_cylinder is not None:
+        parts, cavity = _generated(entry)
         parts = [replace(p, rgba=rgba) for p in _transform(parts, pos, quat)]
         if quat != (1.0, 0.0, 0.0, 0.0):
             cavity = None    # a turned cavity is not axis-aligned with the object: declare it
         else:
             cavity = Cavity(cavity.half_extents, tuple(float(a + b) for a, b in zip(cavity.offset, pos)))
         return parts, cavity
-    if "mesh" in raw:
-        _keys(path, field, raw, ("mesh", *placement), "a key of a mesh part")
-        ref = parse_mesh(path, f"{field}.mesh", raw["mesh"])
+    if entry.mesh is not None:
+        ref = parse_mesh(path, f"{field}.mesh", entry.mesh)
         half = tuple(float(v) for v in (load_hull(ref).extents / 2).round(6))
         return [Part("mesh", half, pos, quat, rgba, ref)], None
-    _keys(path, field, raw, PART_KEYS, f"a mesh, a generated shape {list(GENERATORS)} or a part key")
-    shape = raw.get("shape")
-    if not isinstance(shape, str) or shape not in SHAPE_SIZE_LEN:     # a list or mapping is not a shape name
-        raise SpecError(path, f"{field}.shape", f"one of {sorted(SHAPE_SIZE_LEN)} (or a mesh or a generated "
-                        f"shape {list(GENERATORS)})", shape)
-    size = num_list(path, f"{field}.size", raw.get("size"), SHAPE_SIZE_LEN[shape], positive=True)
-    return [Part(shape, size, pos, quat, rgba)], None
+    return [Part(entry.shape, tuple(float(v) for v in entry.size), pos, quat, rgba)], None
 
 
-def parse_parts(path, field: str, raw) -> tuple[tuple[Part, ...], Cavity | None]:
+def build_parts(path, field: str, entries: list[PartEntry]) -> tuple[tuple[Part, ...], Cavity | None]:
     """A `parts` list; the cavity is that of its single generated shape, if it has exactly one."""
-    if not isinstance(raw, list) or not raw:
-        raise SpecError(path, field, "a non-empty list of parts", raw)
     parts, cavities = [], []
-    for i, item in enumerate(raw):
-        p, cavity = parse_part(path, f"{field}[{i}]", item)
+    for i, entry in enumerate(entries):
+        p, cavity = build_part(path, f"{field}[{i}]", entry)
         parts += p
         if cavity is not None:
             cavities.append(cavity)

@@ -1,21 +1,21 @@
 """Schema of `sim/catalog/tasks/<name>.yaml`: the table, the objects and where they start, zones and points.
 
-Blocks with their own compilers stay mappings or lists here and are checked by them, with the same
-file-and-field errors: an object's `parts`/`mesh`/`shape`+`size` (sim/scene/parts.py), its `links`
-(sim/scene/articulated.py), `demo_plan` (sim/demo_plan.py, which validates each step against its kind's
-schema in sim/schema/demo_plan.py, with the task's objects as context) and `metrics` (the shared
-evaluator). What refers across objects (a zone, a support object, the paper embodiment) is checked by the
-loader."""
+An object's geometry and joints (`shape` + `size`, `parts`, `links`, `key_rows`) are checked by the models
+in sim/schema/object_parts.py; a mesh's file where it is read (sim/scene/mesh_files.py). Blocks with their
+own compilers stay mappings or lists here and are checked by them, with the same file-and-field errors:
+`demo_plan` (sim/demo_plan.py, which validates each step against its kind's schema in
+sim/schema/demo_plan.py, with the task's objects as context) and `metrics` (the shared evaluator). What
+refers across objects (a zone, a support object, the paper embodiment) is checked by the loader."""
 
 from __future__ import annotations
 
 from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import Field, model_validator
-
-from sim.scene.fields import DENSITY_RANGE_KG_M3, FRICTION_RANGE, MASS_RANGE_KG, ROLLING_FRICTION_RANGE_M
+from pydantic import Field, field_validator, model_validator
 
 from .base import Bool, CatalogModel, Name, Number, PositiveNumber, Str, Vec3, ranged
+from .object_parts import (DENSITY_RANGE_KG_M3, FRICTION_RANGE, MASS_RANGE_KG, ROLLING_FRICTION_RANGE_M, SHAPES, KeyRow,
+                           Link, PartEntry, Sizes, shape_size, unique_link_names)
 from .robot_parts import SPAN_M, Coord, Length, Point3, Rgba
 
 TABLE_HEIGHT_RANGE_M = (0.4, 1.2)
@@ -66,10 +66,10 @@ class Container(CatalogModel):
 class TaskObject(CatalogModel):
     keys_label: ClassVar[str] = "an object key"
 
-    shape: Any = None                  # shape + size, mesh or parts: sim/scene/parts.py
-    size: Any = None
-    parts: Any = None
-    mesh: Any = None
+    shape: Literal[SHAPES] = None      # shape + size (one primitive), mesh or parts: sim/scene/parts.py
+    size: Sizes = None
+    parts: list[PartEntry] = Field(None, min_length=1)
+    mesh: Any = None                   # a file path or {file, scale}: sim/scene/mesh_files.py
     mass: Number | None = ranged(None, ge=MASS_RANGE_KG[0], le=MASS_RANGE_KG[1], unit="kg")
     density: Number | None = ranged(None, ge=DENSITY_RANGE_KG_M3[0], le=DENSITY_RANGE_KG_M3[1], unit="kg/m^3")
     friction: Number = ranged(1.0, ge=FRICTION_RANGE[0], le=FRICTION_RANGE[1])
@@ -80,9 +80,11 @@ class TaskObject(CatalogModel):
     fixed_pose: Bool = False           # task constraint: never perturbed
     container: Container | None = Field(None, description="a mapping {interior_half_extents, interior_offset}")
     base: Literal[BASES] = "free"
-    links: Any = None                  # articulated links: sim/scene/articulated.py
-    key_rows: Any = None
+    links: dict[str, Link] = None      # articulated links: sim/scene/articulated.py
+    key_rows: list[KeyRow] = None
     mouth_axis: Vec3 | None = None     # pourers: local axis of the mouth
+
+    _size = field_validator("size")(shape_size)
 
     @model_validator(mode="after")
     def _one_of_each(self):
@@ -93,6 +95,7 @@ class TaskObject(CatalogModel):
             raise ValueError("exactly one of 'pose' or 'zone'")
         if self.mass is not None and self.density is not None:
             raise ValueError("one of 'mass' (kg) or 'density' (kg/m^3), not both")
+        unique_link_names(self.links, self.key_rows)
         return self
 
 
