@@ -10,7 +10,7 @@ turns descriptions into MuJoCo bodies and ``kinematics.py`` into a Pinocchio mod
     fields.py          DescriptionError and the field-path helpers of raw blocks
     catalog_paths.py   where the files are; reading one through its schema
     links.py           geoms, joints, mass properties -> LinkSpec
-    tactile_block.py   a hand's tactile pads and site registry
+    tactile_block.py   a hand's tactile pads and site registry (its schema: sim/schema/tactile.py)
     arm_file.py, hand_file.py, embodiment_file.py   one loader per kind
 
 Conventions (all lengths in metres, angles in radians): arm joints follow URDF (``arm_file.py``); hands
@@ -30,16 +30,12 @@ from .frames import (Transform, _transform, frame_from_axes, frame_transform, ma
 from .hand_file import (ActuatorSpec, CouplingSpec, GraspProbe, HandDescription, TabletopGrasp, coupled_position,
                         coupled_slope, hand_names, load_hand, read_hand_file)
 from .links import GEOM_TYPES, GeomSpec, Inertial, JointSpec, LinkSpec
-from .tactile_block import (DEFAULT_PAD_CONDIM, DEFAULT_PAD_FRICTION, PAD_CONDIMS, PAD_FIELDS,
-                            PAD_ORTHOGONAL_TOLERANCE, PAD_SYMMETRY_TOLERANCE_M, PAD_UNIT_TOLERANCE, TACTILE_GROUPINGS,
-                            TACTILE_NORMAL_CONVENTIONS, TACTILE_SIDES, THUMB, TactileGroup, TactilePad, TactileSite,
-                            TactileSpec, parse_tactile_block, parse_tactile_pad)
+from .tactile_block import (PAD_FIELDS, PAD_SYMMETRY_TOLERANCE_M, TACTILE_SIDES, THUMB, TactileGroup, TactilePad,
+                            TactileSite, TactileSpec, parse_tactile_block, parse_tactile_pad)
 
 __all__ = [
-    "ARMS_DIR", "CAMERA_NAMES", "CATALOG_DIR", "DEFAULT_FOVY", "DEFAULT_PAD_CONDIM", "DEFAULT_PAD_FRICTION",
-    "EMBODIMENTS_DIR", "GEOM_TYPES", "HANDS_DIR", "KEEP_SIGN_MARGIN_RAD", "PAD_CONDIMS", "PAD_FIELDS",
-    "PAD_ORTHOGONAL_TOLERANCE", "PAD_SYMMETRY_TOLERANCE_M", "PAD_UNIT_TOLERANCE", "TACTILE_GROUPINGS",
-    "TACTILE_NORMAL_CONVENTIONS", "TACTILE_SIDES", "THUMB",
+    "ARMS_DIR", "CAMERA_NAMES", "CATALOG_DIR", "DEFAULT_FOVY", "EMBODIMENTS_DIR", "GEOM_TYPES", "HANDS_DIR",
+    "KEEP_SIGN_MARGIN_RAD", "PAD_FIELDS", "PAD_SYMMETRY_TOLERANCE_M", "TACTILE_SIDES", "THUMB",
     "ActuatorSpec", "ArmDescription", "CameraSpec", "CouplingSpec", "DescriptionError", "EmbodimentDescription",
     "GeomSpec", "GraspProbe", "HandDescription", "Inertial", "JointSpec", "LinkSpec", "TabletopGrasp",
     "TactileGroup", "TactilePad", "TactileSite", "TactileSpec", "Transform",

@@ -1,24 +1,25 @@
 """A hand file's ``tactile`` block: the contact pads and the site/group registry, checked against the hand's
 links and fingers and against the paper's grouping policies (format: the comment before ``_TACTILE_FIELDS``).
 
-The block has its own validator rather than a per-file schema: its rules (one site per finger, pads
-identical within a group, mirror-symmetric shared pads) look across the block and the hand's links, and the
-tactile layer checks blocks on their own with its own error class (``parse_tactile_block``, ``parse_tactile_pad``)."""
+Keys, types, ranges and each pad on its own are checked by the block's schema (sim/schema/tactile.py); this
+module checks what looks across the block and the hand's links (one site per finger, pads identical within
+a group, mirror-symmetric shared pads), and the tactile layer checks blocks on their own with its own error
+class (``parse_tactile_block``, ``parse_tactile_pad``)."""
 
 from __future__ import annotations
 
-import math
 import dataclasses
 from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
 
-from .fields import _Ctx, _expected_error, _is_number, _vec
+from sim.schema import validate
+from sim.schema.tactile import Pad, TactileBlock
+
+from .fields import _Ctx, _expected_error
 from .mirror import mirror_vec
 
-TACTILE_GROUPINGS = ("side_shared", "side_specific", "per_finger")
-TACTILE_NORMAL_CONVENTIONS = ("inward", "outward")
 TACTILE_SIDES = ("right", "left")
 THUMB = "thumb"
 PAD_FIELDS = ("center", "normal", "axis", "length", "width", "curvature_radius")
@@ -122,74 +123,22 @@ class TactileSpec:
 # (write ``pad: *anchor``): the builder places each site's pad geom from it, and one asset can only
 # serve pads that are identical in their attach-body frames.
 
-_TACTILE_FIELDS = ("grouping", "normal_convention", "resolution", "groups", "sites", "pad_friction", "pad_condim")
-_TACTILE_GROUP_FIELDS = ("assets", "pad")
-_TACTILE_SITE_FIELDS = ("name", "finger", "group", "attach_body")
-PAD_UNIT_TOLERANCE = 1e-3
-PAD_ORTHOGONAL_TOLERANCE = 1e-3
 PAD_SYMMETRY_TOLERANCE_M = 1e-9
-DEFAULT_PAD_FRICTION = (1.2, 0.02, 0.002)
-DEFAULT_PAD_CONDIM = 4
-PAD_CONDIMS = (1, 3, 4, 6)
 
 
-def _string(value, ctx: _Ctx) -> str:
-    if not isinstance(value, str) or not value:
-        ctx.expect("a non-empty string", value)
-    return value
-
-
-def _mapping(raw, ctx: _Ctx, keys) -> dict:
-    if not isinstance(raw, dict):
-        ctx.expect("a mapping with " + ", ".join(keys), raw)
-    unknown = sorted(str(k) for k in set(raw) - set(keys))
-    if unknown:
-        ctx.sub(unknown[0]).expect("one of " + ", ".join(keys), "unknown")
-    return raw
-
-
-def _pad_vector(raw: dict, key: str, ctx: _Ctx) -> np.ndarray:
-    value = raw.get(key)
-    numbers = isinstance(value, (list, tuple)) and all(_is_number(x) for x in value)   # not "12", not true
-    vec = np.asarray(value, dtype=np.float64) if numbers else None
-    if vec is None or vec.shape != (3,) or not np.all(np.isfinite(vec)):
-        ctx.sub(key).expect("a list of 3 finite numbers", value)
-    return vec
-
-
-def _pad_length(value, ctx: _Ctx, allow_zero: bool = False) -> float:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or value < 0 or (value == 0 and not allow_zero):
-        ctx.expect("a number >= 0 (metres)" if allow_zero else "a positive number (metres)", value)
-    return float(value)
-
-
-def _pad(raw, ctx: _Ctx) -> TactilePad:
-    if not isinstance(raw, dict):
-        ctx.expect("a mapping with " + ", ".join(PAD_FIELDS), raw)
-    missing = [k for k in PAD_FIELDS if k not in raw and k != "curvature_radius"]
-    if missing:
-        ctx.sub(missing[0]).expect("a value (field is missing)")
-    _mapping(raw, ctx, PAD_FIELDS)
-    center, normal, axis = (_pad_vector(raw, k, ctx) for k in ("center", "normal", "axis"))
-    for key, vec in (("normal", normal), ("axis", axis)):
-        if abs(np.linalg.norm(vec) - 1.0) > PAD_UNIT_TOLERANCE:
-            ctx.sub(key).expect("a unit vector", vec.tolist())
-    if abs(float(normal @ axis)) > PAD_ORTHOGONAL_TOLERANCE:
-        ctx.sub("axis").expect("a vector orthogonal to normal", axis.tolist())
+def _pad(pad: Pad) -> TactilePad:
+    """A checked pad, its normal and axis made exactly unit and orthogonal."""
+    normal = np.asarray(pad.normal, dtype=np.float64)
+    axis = np.asarray(pad.axis, dtype=np.float64)
     normal = normal / np.linalg.norm(normal)
     axis = axis - (axis @ normal) * normal
-    return TactilePad(
-        center=center, normal=normal, axis=axis / np.linalg.norm(axis),
-        length=_pad_length(raw.get("length"), ctx.sub("length")),
-        width=_pad_length(raw.get("width"), ctx.sub("width")),
-        curvature_radius=_pad_length(raw.get("curvature_radius", 0.0), ctx.sub("curvature_radius"), True),
-    )
+    return TactilePad(center=np.asarray(pad.center, dtype=np.float64), normal=normal, axis=axis / np.linalg.norm(axis),
+                      length=float(pad.length), width=float(pad.width), curvature_radius=float(pad.curvature_radius))
 
 
 def parse_tactile_pad(raw, source=None, field: str = "pad", error: Callable = _expected_error) -> TactilePad:
     """Validate one ``pad`` mapping; errors (built by ``error``) name ``source`` and the dotted field path."""
-    return _pad(raw, _Ctx(source, field, error))
+    return _pad(validate(Pad, raw, source, prefix=field, error=error))
 
 
 def _pad_is_mirror_symmetric(pad: TactilePad) -> bool:
@@ -197,27 +146,23 @@ def _pad_is_mirror_symmetric(pad: TactilePad) -> bool:
                for v in (pad.center, pad.normal, pad.axis))
 
 
-def _tactile_sites(entries, pads: dict[str, TactilePad], ctx: _Ctx, link_names: set[str],
+def _tactile_sites(block: TactileBlock, pads: dict[str, TactilePad], ctx: _Ctx, link_names: set[str],
                    fingers: list[str]) -> list[TactileSite]:
-    if not isinstance(entries, list) or not entries:
-        ctx.sub("sites").expect("a non-empty list of sites", entries)
     sites: list[TactileSite] = []
-    for i, entry in enumerate(entries):
+    for i, entry in enumerate(block.sites):
         sctx = ctx.sub(f"sites[{i}]")
-        entry = _mapping(entry, sctx, (*_TACTILE_SITE_FIELDS, "pad"))
-        name, finger, group, body = (_string(entry.get(k), sctx.sub(k)) for k in _TACTILE_SITE_FIELDS)
-        if any(s.name == name for s in sites):
-            sctx.sub("name").expect("a site name unique in the hand", name)
-        if finger not in fingers:
-            sctx.sub("finger").expect("one of the fingers " + ", ".join(fingers), finger)
-        if body not in link_names:
-            sctx.sub("attach_body").expect("a link of this hand", body)
-        if group not in pads:
-            sctx.sub("group").expect("one of the groups " + ", ".join(pads), group)
-        expected = f"the pad of group '{group}' (tactile.groups.{group}.pad; write pad: *anchor)"
-        if "pad" not in entry or not _pad(entry["pad"], sctx.sub("pad")).same_as(pads[group]):
+        if any(s.name == entry.name for s in sites):
+            sctx.sub("name").expect("a site name unique in the hand", entry.name)
+        if entry.finger not in fingers:
+            sctx.sub("finger").expect("one of the fingers " + ", ".join(fingers), entry.finger)
+        if entry.attach_body not in link_names:
+            sctx.sub("attach_body").expect("a link of this hand", entry.attach_body)
+        if entry.group not in pads:
+            sctx.sub("group").expect("one of the groups " + ", ".join(pads), entry.group)
+        expected = f"the pad of group '{entry.group}' (tactile.groups.{entry.group}.pad; write pad: *anchor)"
+        if entry.pad is None or not _pad(entry.pad).same_as(pads[entry.group]):
             sctx.sub("pad").expect(expected)
-        sites.append(TactileSite(name, finger, group, body, pads[group]))
+        sites.append(TactileSite(entry.name, entry.finger, entry.group, entry.attach_body, pads[entry.group]))
     covered = {s.finger for s in sites}
     if covered != set(fingers):
         ctx.sub("sites").expect(f"one site per finger {fingers}", sorted(covered))
@@ -256,36 +201,16 @@ def _check_tactile_policy(grouping: str, groups: dict[str, TactileGroup], sites:
 
 
 def _tactile_block(raw, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
-    raw = _mapping(raw, ctx, _TACTILE_FIELDS)
-    grouping = raw.get("grouping")
-    if grouping not in TACTILE_GROUPINGS:
-        ctx.sub("grouping").expect("one of " + ", ".join(TACTILE_GROUPINGS), grouping)
-    convention = raw.get("normal_convention")
-    if convention not in TACTILE_NORMAL_CONVENTIONS:
-        ctx.sub("normal_convention").expect("one of " + ", ".join(TACTILE_NORMAL_CONVENTIONS), convention)
-    resolution = raw.get("resolution")
-    if not isinstance(resolution, int) or isinstance(resolution, bool) or resolution < 1:
-        ctx.sub("resolution").expect("a positive integer", resolution)
-    friction = _vec(raw.get("pad_friction", DEFAULT_PAD_FRICTION), 3, ctx.sub("pad_friction"))
-    condim = raw.get("pad_condim", DEFAULT_PAD_CONDIM)
-    if condim not in PAD_CONDIMS or isinstance(condim, bool):
-        ctx.sub("pad_condim").expect("one of " + ", ".join(map(str, PAD_CONDIMS)), condim)
-    raw_groups = raw.get("groups")
-    if not isinstance(raw_groups, dict) or not raw_groups:
-        ctx.sub("groups").expect("a mapping of group name -> {assets, pad}", raw_groups)
-    assets, pads = {}, {}
-    for name, g in raw_groups.items():
-        gctx = ctx.sub(f"groups.{name}")
-        g = _mapping(g, gctx, _TACTILE_GROUP_FIELDS)
-        sides = _mapping(g.get("assets"), gctx.sub("assets"), TACTILE_SIDES)
-        assets[str(name)] = {side: _string(sides.get(side), gctx.sub(f"assets.{side}")) for side in TACTILE_SIDES}
-        pads[str(name)] = _pad(g.get("pad"), gctx.sub("pad"))
-    sites = _tactile_sites(raw.get("sites"), pads, ctx, link_names, fingers)
-    groups = {name: TactileGroup(name, assets[name], pads[name], tuple(s.name for s in sites if s.group == name))
+    block = validate(TactileBlock, raw, ctx.path, prefix=ctx.where, error=ctx.error)
+    pads = {name: _pad(group.pad) for name, group in block.groups.items()}
+    sites = _tactile_sites(block, pads, ctx, link_names, fingers)
+    groups = {name: TactileGroup(name, {side: getattr(block.groups[name].assets, side) for side in TACTILE_SIDES},
+                                 pads[name], tuple(s.name for s in sites if s.group == name))
               for name in pads}
-    _check_tactile_policy(grouping, groups, sites, ctx)
-    return TactileSpec(grouping=grouping, normal_convention=convention, resolution=resolution, groups=groups,
-                       sites=tuple(sites), pad_friction=tuple(float(x) for x in friction), pad_condim=int(condim))
+    _check_tactile_policy(block.grouping, groups, sites, ctx)
+    return TactileSpec(grouping=block.grouping, normal_convention=block.normal_convention,
+                       resolution=block.resolution, groups=groups, sites=tuple(sites),
+                       pad_friction=tuple(float(x) for x in block.pad_friction), pad_condim=int(block.pad_condim))
 
 
 def parse_tactile_block(raw, source, link_names: set[str], fingers: list[str], field: str = "tactile") -> TactileSpec:

@@ -21,9 +21,9 @@ def test_parse_pad_normalises_and_keeps_values(round_pad):
         ({"normal": [0, 2, 0]}, "pad.normal", "unit vector"),
         ({"axis": [0, 1, 0]}, "pad.axis", "orthogonal"),
         ({"width": -0.01}, "pad.width", "positive"),
-        ({"center": [0, 1]}, "pad.center", "3 finite numbers"),
+        ({"center": [0, 1]}, "pad.center", "a list of 3 items"),
         ({"curvature_radius": -1}, "pad.curvature_radius", ">= 0"),
-        ({"colour": "red"}, "pad.colour", "one of"),
+        ({"colour": "red"}, "pad.colour", "a pad key from"),
     ],
 )
 def test_pad_errors_name_file_field_and_expectation(change, field, expected):
