@@ -7,7 +7,7 @@ crosses fields (joint names, links, actuators) and build the dataclasses. The bu
 turns descriptions into MuJoCo bodies and ``kinematics.py`` into a Pinocchio model.
 
     frames.py          rotations and rigid transforms
-    fields.py          DescriptionError and the field-path helpers of raw blocks
+    fields.py          DescriptionError and the field path of cross-reference errors
     catalog_paths.py   where the files are; reading one through its schema
     links.py           geoms, joints, mass properties -> LinkSpec
     tactile_block.py   a hand's tactile pads and site registry (its schema: sim/schema/tactile.py)
@@ -24,8 +24,8 @@ from sim.schema.embodiment import CAMERA_NAMES
 from .arm_file import KEEP_SIGN_MARGIN_RAD, ArmDescription, arm_names, load_arm
 from .catalog_paths import ARMS_DIR, CATALOG_DIR, EMBODIMENTS_DIR, HANDS_DIR
 from .embodiment_file import DEFAULT_FOVY, CameraSpec, EmbodimentDescription, embodiment_names, load_embodiment
-from .fields import DescriptionError, _Ctx, _expected_error, _get, _num, _vec
-from .frames import (Transform, _transform, frame_from_axes, frame_transform, mat_to_quat, quat_to_mat,
+from .fields import DescriptionError, _Ctx, _expected_error
+from .frames import (Transform, frame_from_axes, frame_transform, mat_to_quat, quat_to_mat,
                      rpy_to_matrix)
 from .hand_file import (ActuatorSpec, CouplingSpec, GraspProbe, HandDescription, TabletopGrasp, coupled_position,
                         coupled_slope, hand_names, load_hand, read_hand_file)
@@ -42,5 +42,5 @@ __all__ = [
     "arm_names", "coupled_position", "coupled_slope", "embodiment_names", "frame_from_axes", "frame_transform",
     "hand_names", "load_arm", "load_embodiment", "load_hand", "mat_to_quat", "parse_tactile_block",
     "parse_tactile_pad", "quat_to_mat", "read_hand_file", "rpy_to_matrix",
-    "_Ctx", "_expected_error", "_get", "_num", "_transform", "_vec",
+    "_Ctx", "_expected_error",
 ]

@@ -1,12 +1,11 @@
-"""Errors of the robot description files, and the field-path helpers of the blocks that are checked
-against the rest of their hand (tactile, real_model, retarget) rather than by the per-file schema."""
+"""Errors of the robot description files, and the field path the loaders name when what a file refers to
+does not match the rest of its hand or arm (a link, a joint, an actuator, a finger); keys, types and ranges
+are the schema's (sim/schema)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Callable
-
-import numpy as np
 
 from sim.errors import SpecError
 
@@ -49,38 +48,3 @@ class _Ctx:
 
     def expect(self, expected: str, got=None):
         raise self.error(self.path, self.where, expected, got)
-
-
-def _get(d: dict, key: str, ctx: _Ctx, default=Ellipsis):
-    if not isinstance(d, dict):
-        ctx.fail(f"expected a mapping, got {type(d).__name__}")
-    if key not in d:
-        if default is Ellipsis:
-            ctx.sub(key).fail("missing")
-        return default
-    return d[key]
-
-
-def _is_number(x) -> bool:
-    """A YAML number: not a quoted one ("12"), not a boolean."""
-    return isinstance(x, (int, float)) and not isinstance(x, bool)
-
-
-def _vec(v, n: int, ctx: _Ctx) -> np.ndarray:
-    if not isinstance(v, (list, tuple)) or not all(_is_number(x) for x in v):
-        ctx.fail(f"expected a list of {n} numbers, got {v!r}")
-    a = np.asarray([float(x) for x in v], dtype=float)
-    if not np.all(np.isfinite(a)):
-        ctx.fail(f"expected a list of {n} finite numbers, got {v!r}")
-    if a.shape != (n,):
-        ctx.fail(f"expected a list of {n} numbers, got {len(a)}")
-    return a
-
-
-def _num(v, ctx: _Ctx, positive: bool = False) -> float:
-    if not _is_number(v) or not np.isfinite(v):
-        ctx.fail(f"expected a number, got {v!r}")
-    x = float(v)
-    if positive and not x > 0:
-        ctx.fail(f"expected a positive number, got {x}")
-    return x

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .fields import DescriptionError, _Ctx, _get, _vec
+from .fields import DescriptionError
 
 
 def rpy_to_matrix(rpy) -> np.ndarray:
@@ -92,22 +92,6 @@ def frame_transform(frame) -> Transform:
         rot = frame_from_axes(frame.z, frame.y)
     elif frame.quat is not None:
         rot = quat_to_mat(np.asarray(frame.quat, dtype=float) / np.linalg.norm(frame.quat))
-    else:
-        rot = np.eye(3)
-    return Transform(pos, rot)
-
-
-def _transform(d: dict | None, ctx: _Ctx):
-    """``{xyz, rpy}`` or ``{xyz, z, y}`` (frame from axes) or ``{xyz, quat}`` (w, x, y, z)."""
-    if d is None:
-        return Transform.identity()
-    pos = _vec(d.get("xyz", [0, 0, 0]), 3, ctx.sub("xyz"))
-    if "rpy" in d:
-        rot = rpy_to_matrix(_vec(d["rpy"], 3, ctx.sub("rpy")))
-    elif "z" in d:
-        rot = frame_from_axes(_vec(d["z"], 3, ctx.sub("z")), _vec(_get(d, "y", ctx), 3, ctx.sub("y")))
-    elif "quat" in d:
-        rot = quat_to_mat(_vec(d["quat"], 4, ctx.sub("quat")) / np.linalg.norm(d["quat"]))
     else:
         rot = np.eye(3)
     return Transform(pos, rot)

@@ -229,10 +229,10 @@ def read_hand_file(path: Path) -> HandDescription:
         for field_name, keys in (("close", g.close), ("late", g.late)):
             _check_actuators(keys, act_names, ctx.sub(f"tabletop_grasp.{field_name}"))
         tabletop = TabletopGrasp(centre=np.asarray(g.centre, float), close=dict(g.close), late=tuple(g.late))
-    tactile = hand_tactile(data, ctx, {link.name for link in links}, fingers)
+    tactile = hand_tactile(m.tactile, ctx.sub("tactile"), {link.name for link in links}, fingers)
     real_model = None
     if m.real_model is not None:
-        real_model = parse_real_model(data["real_model"], ctx.sub("real_model"), links, fingers,
+        real_model = parse_real_model(m.real_model, ctx.sub("real_model"), links, fingers,
                                       [a.name for a in actuators], {s.attach_body for s in tactile.sites})
     return HandDescription(
         name=m.name if m.name is not None else name,

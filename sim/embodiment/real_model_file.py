@@ -7,8 +7,10 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-from .fields import _Ctx, _get, _num
-from .frames import Transform, _transform
+from sim.schema.real_model import RealModel
+
+from .fields import _Ctx
+from .frames import Transform, frame_transform
 from .links import LinkSpec
 
 HAND_MODELS = ("generated", "real")
@@ -54,64 +56,34 @@ class RealModelSpec:
     path: Path                        # the hand file
 
 
-def _str_map(raw, ctx: _Ctx) -> dict[str, str]:
-    if not isinstance(raw, dict) or not raw:
-        ctx.fail(f"expected a non-empty mapping, got {raw!r}")
-    return {str(k): str(v) for k, v in raw.items()}
-
-
-def _sides(raw, ctx: _Ctx) -> dict:
-    if not isinstance(raw, dict) or set(raw) != set(SIDES):
-        ctx.fail(f"expected a mapping with exactly the keys {list(SIDES)}, got {raw!r}")
-    return raw
-
-
-def parse_real_model(raw: dict, ctx: _Ctx, links: list[LinkSpec], fingers: list[str],
+def parse_real_model(m: RealModel, ctx: _Ctx, links: list[LinkSpec], fingers: list[str],
                      actuator_names: list[str], tactile_bodies: set[str]) -> RealModelSpec:
-    """Validate the ``real_model:`` block against the generated hand it replaces."""
-    if not isinstance(raw, dict):
-        ctx.fail(f"expected a mapping, got {type(raw).__name__}")
-    menagerie = raw.get("menagerie")
-    files = {s: str(v) for s, v in _sides(raw["files"], ctx.sub("files")).items()} if "files" in raw else {}
-    mjcf = {s: (ctx.path.parent / str(v)).resolve() for s, v in _sides(raw["mjcf"], ctx.sub("mjcf")).items()} \
-        if "mjcf" in raw else {}
-    if not (menagerie and files) and not mjcf:
-        ctx.fail("expected 'menagerie' + 'files: {right, left}' and/or 'mjcf: {right, left}'")
-    prefix = {s: str(v) for s, v in _sides(raw.get("name_prefix", {"right": "", "left": ""}),
-                                           ctx.sub("name_prefix")).items()}
-    mount = {s: _transform(v, ctx.sub(f"mount.{s}"))
-             for s, v in _sides(_get(raw, "mount", ctx), ctx.sub("mount")).items()}
-    joints = _str_map(_get(raw, "joints", ctx), ctx.sub("joints"))
+    """The ``real_model:`` block (checked by its schema, sim/schema/real_model.py), checked against the
+    generated hand it replaces."""
     ours = {j.name for link in links for j in link.joints}
-    mapped = set(joints.values())
-    if mapped != ours or len(mapped) != len(joints):
+    mapped = set(m.joints.values())
+    if mapped != ours or len(mapped) != len(m.joints):
         ctx.sub("joints").fail(f"expected a one-to-one map onto the hand's joints; missing {sorted(ours - mapped)}, "
                                f"unknown {sorted(mapped - ours)}")
-    acts = []
-    for model_name, v in _get(raw, "actuators", ctx).items():
-        actx = ctx.sub(f"actuators.{model_name}")
-        if isinstance(v, dict):
-            acts.append(RealActuator(str(model_name), str(_get(v, "name", actx)),
-                                     _num(v.get("ctrl_scale", 1.0), actx.sub("ctrl_scale"), positive=True)))
-        else:
-            acts.append(RealActuator(str(model_name), str(v), 1.0))
+    acts = tuple(RealActuator(model_name, a.name, a.ctrl_scale) for model_name, a in m.actuators.items())
     got = [a.name for a in acts]
     if sorted(got) != sorted(actuator_names):
         ctx.sub("actuators").fail(f"expected one entry per actuator of the hand {actuator_names}, got {got}")
-    bodies = _str_map(_get(raw, "bodies", ctx), ctx.sub("bodies"))
     palm = links[0].name
     roots = {next(lk.name for lk in links if lk.finger == f) for f in fingers}
     needed = {palm} | set(tactile_bodies) | roots
-    if not needed <= set(bodies):
+    if not needed <= set(m.bodies):
         ctx.sub("bodies").fail(f"expected the palm, every tactile attach body and every finger's first link; "
-                               f"missing {sorted(needed - set(bodies))}")
-    unknown = set(bodies) - {lk.name for lk in links}
+                               f"missing {sorted(needed - set(m.bodies))}")
+    unknown = set(m.bodies) - {lk.name for lk in links}
     if unknown:
         ctx.sub("bodies").fail(f"{sorted(unknown)} are not links of this hand")
+
     return RealModelSpec(
-        source=str(_get(raw, "source", ctx)), menagerie=str(menagerie) if menagerie else None, files=files,
-        mjcf=mjcf, name_prefix=prefix, root_body=str(_get(raw, "root_body", ctx)), mount=mount,
-        link_frame=_transform(raw.get("link_frame"), ctx.sub("link_frame")),
-        drop_joints=tuple(str(j) for j in raw.get("drop_joints", []) or []), joints=joints,
-        actuators=tuple(acts), bodies=bodies, path=ctx.path,
+        source=m.source, menagerie=m.menagerie, files=dict(m.files) if m.files else {},
+        mjcf={s: (ctx.path.parent / v).resolve() for s, v in m.mjcf} if m.mjcf else {},
+        name_prefix=dict(m.name_prefix) if m.name_prefix else {s: "" for s in SIDES}, root_body=m.root_body,
+        mount={s: frame_transform(frame) for s, frame in m.mount}, link_frame=frame_transform(m.link_frame),
+        drop_joints=tuple(m.drop_joints),
+        joints=dict(m.joints), actuators=acts, bodies=dict(m.bodies), path=ctx.path,
     )

@@ -200,8 +200,7 @@ def _check_tactile_policy(grouping: str, groups: dict[str, TactileGroup], sites:
                                                                asset)
 
 
-def _tactile_block(raw, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
-    block = validate(TactileBlock, raw, ctx.path, prefix=ctx.where, error=ctx.error)
+def _tactile_block(block: TactileBlock, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
     pads = {name: _pad(group.pad) for name, group in block.groups.items()}
     sites = _tactile_sites(block, pads, ctx, link_names, fingers)
     groups = {name: TactileGroup(name, {side: getattr(block.groups[name].assets, side) for side in TACTILE_SIDES},
@@ -215,12 +214,14 @@ def _tactile_block(raw, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> 
 
 def parse_tactile_block(raw, source, link_names: set[str], fingers: list[str], field: str = "tactile") -> TactileSpec:
     """Validate a hand's ``tactile`` mapping against its links and fingers (``source`` names the file in errors)."""
-    return _tactile_block(raw, _Ctx(source, field), set(link_names), list(fingers))
+    ctx = _Ctx(source, field)
+    block = validate(TactileBlock, raw, source, prefix=field, error=ctx.error)
+    return _tactile_block(block, ctx, set(link_names), list(fingers))
 
 
-def hand_tactile(data: dict, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
-    """The ``tactile`` block of a hand file's raw mapping (the schema has checked it is a mapping)."""
-    return _tactile_block(data["tactile"], ctx.sub("tactile"), link_names, fingers)
+def hand_tactile(block: TactileBlock, ctx: _Ctx, link_names: set[str], fingers: list[str]) -> TactileSpec:
+    """A hand file's ``tactile`` block, checked by the hand's schema, checked against its links and fingers."""
+    return _tactile_block(block, ctx, link_names, fingers)
 
 
 def side_pad(p: TactilePad, side: str) -> TactilePad:

@@ -1,8 +1,8 @@
 """Schema of `sim/catalog/hands/<name>.yaml` (conventions: sim/embodiment/description.py).
 
-The `tactile` and `real_model` blocks are mappings here: each has its own validator
-(sim/embodiment/tactile_block.py, real_model.py) whose rules look across the block and the hand's links,
-fingers and actuators. What refers to links, joints and actuators is checked by the loaders."""
+The `tactile` and `real_model` blocks have schemas of their own (sim/schema/tactile.py, real_model.py);
+what they and the rest of the file refer to (links, joints, fingers, actuators) is checked by the loaders
+(sim/embodiment/hand_file.py, tactile_block.py, real_model_file.py)."""
 
 from __future__ import annotations
 
@@ -11,8 +11,10 @@ from typing import Annotated, Literal
 from pydantic import Field
 
 from .base import CatalogModel, Name, Number, PositiveNumber, Str, Vec3, ranged
+from .real_model import RealModel
 from .robot_parts import (SPAN_M, Angle, Frame, GeomDefaults, Joint, JointDefaults, Length, LinkPair, Mass,
                           MassProperties, Point3)
+from .tactile import TactileBlock
 
 
 class Palm(MassProperties):
@@ -99,8 +101,8 @@ class HandFile(CatalogModel):
     home: dict[str, Angle] | None = None
     grasp_probe: GraspProbe | None = None
     tabletop_grasp: TabletopGrasp | None = None
-    tactile: dict
-    real_model: dict | None = None
+    tactile: TactileBlock
+    real_model: RealModel | None = None
     retarget: Retarget | None = None
     contact_exclude: list[LinkPair] | None = None
     servo_error_at_full_effort: PositiveNumber = 0.1
