@@ -11,11 +11,55 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Annotated, ClassVar
 
 import yaml
 
+from pydantic import Field
+
 from policies.interface import ActionSpec, ObservationSpec
 from sim.errors import SpecError
+from sim.schema import CatalogModel, validate
+from sim.schema.base import Bool, Int, Name, PositiveInt, Str
+
+Pair = Annotated[list[Int], Field(min_length=2, max_length=2)]
+
+
+class ObservationSpecFields(CatalogModel):
+    """`observation_spec`: what the policy observes (policies.interface.ObservationSpec)."""
+
+    keys_label: ClassVar[str] = "an observation_spec key"
+
+    views: list[Name] = Field(min_length=1)
+    width: PositiveInt
+    height: PositiveInt
+    rate_hz: PositiveInt
+    n_obs_steps: PositiveInt = 1
+    state_names: list[Name] = []
+    tactile_sites: list[Name] = []
+    tactile_shape: Pair = [0, 0]
+    tactile_step: PositiveInt = 1
+    privileged: Bool = False
+    tessellation: Pair | None = None
+
+
+class SettingFields(CatalogModel):
+    task: Name
+    embodiment: Name
+
+
+class RemoteSpecFields(CatalogModel):
+    """A remote policy's spec, as a b2d server sends it or a user declares it for another server."""
+
+    keys_label: ClassVar[str] = "a spec key"
+
+    name: Str
+    observation_spec: ObservationSpecFields
+    action_names: list[Name] = Field(min_length=1, description="a non-empty list of actuator names")
+    actions_per_query: PositiveInt
+    setting: SettingFields | None = None
+    anchors: list[Annotated[list[Str], Field(min_length=2, max_length=2)]] = []     # [episode, scene JSON]
+    layout: dict | None = None                  # checked by policies/remote/layout.py
 
 
 @dataclass(frozen=True)
@@ -35,24 +79,10 @@ class RemoteSpec:
 
     @classmethod
     def from_dict(cls, raw, where: str | Path) -> "RemoteSpec":
-        if not isinstance(raw, dict):
-            raise SpecError(where, "<document>", "a mapping with name, observation_spec, action_names, "
-                                                 "actions_per_query", type(raw).__name__)
-        for key in ("name", "observation_spec", "action_names", "actions_per_query"):
-            if key not in raw:
-                raise SpecError(where, key, "present (the remote policy's spec)")
-        try:
-            obs = ObservationSpec.from_dict(raw["observation_spec"])
-        except TypeError as exc:
-            raise SpecError(where, "observation_spec", f"the fields of an ObservationSpec ({exc})") from exc
-        names = raw["action_names"]
-        if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
-            raise SpecError(where, "action_names", "a non-empty list of actuator names", names)
-        per_query = raw["actions_per_query"]
-        if not isinstance(per_query, int) or per_query < 1:
-            raise SpecError(where, "actions_per_query", "an integer >= 1", per_query)
-        return cls(str(raw["name"]), obs, ActionSpec(tuple(names)), per_query, raw.get("setting"),
-                   [tuple(a) for a in raw.get("anchors") or []], raw.get("layout"))
+        m = validate(RemoteSpecFields, raw, where)
+        obs = ObservationSpec.from_dict(m.observation_spec.model_dump())
+        return cls(m.name, obs, ActionSpec(tuple(m.action_names)), m.actions_per_query,
+                   m.setting.model_dump() if m.setting is not None else None, [tuple(a) for a in m.anchors], m.layout)
 
 
 def load_remote_spec(path: str | Path) -> RemoteSpec:

@@ -111,6 +111,13 @@ def test_eval_remote_bad_input_is_one_line(tmp_path):
     both = runner.invoke(cli, ["eval"])
     assert both.exit_code == 2 and "pass --checkpoint DIR or --remote URL" in both.output
     bad = tmp_path / "spec.yaml"
-    bad.write_text("name: x\nobservation_spec: {}\n")
+    bad.write_text("name: x\nobservation_spec: {views: [front], width: 64, height: 48, rate_hz: 10}\n"
+                   "actions_per_query: 1\n")
     declared = runner.invoke(cli, ["eval", "--remote", "tcp://127.0.0.1:1", "--spec", str(bad)])
-    assert declared.exit_code == 2 and "spec.yaml: field 'action_names'" in declared.output
+    assert declared.exit_code == 2 and "spec.yaml: field 'action_names': expected a value" in declared.output
+    bad.write_text("name: x\nobservation_spec: {views: [front], width: 64, heigth: 48, rate_hz: 10}\n"
+                   "action_names: [a]\nactions_per_query: 0\n")
+    declared = runner.invoke(cli, ["eval", "--remote", "tcp://127.0.0.1:1", "--spec", str(bad)])
+    assert declared.exit_code == 2 and "spec.yaml: field 'observation_spec.height': expected a value" in declared.output
+    assert "field 'observation_spec.heigth': expected an observation_spec key from ['views'" in declared.output
+    assert "field 'actions_per_query': expected an integer > 0 (got 0)" in declared.output
