@@ -11,30 +11,7 @@ from typing import ClassVar
 from pydantic import Field, model_validator
 
 from .base import CatalogModel, Name, PositiveNumber, Str
-from .robot_parts import Frame
-
-
-class Sides(CatalogModel):
-    keys_label: ClassVar[str] = "a side"
-
-    right: Name
-    left: Name
-
-
-class SidePrefixes(CatalogModel):
-    """Each side's prefix of the model's names (empty where the model has none)."""
-
-    keys_label: ClassVar[str] = "a side"
-
-    right: Str
-    left: Str
-
-
-class SideFrames(CatalogModel):
-    keys_label: ClassVar[str] = "a side"
-
-    right: Frame
-    left: Frame
+from .robot_parts import Frame, PerSide
 
 
 class RealActuator(CatalogModel):
@@ -57,11 +34,11 @@ class RealModel(CatalogModel):
 
     source: Str
     menagerie: Name = None                  # a MuJoCo Menagerie folder, found under $MENAGERIE_ROOT
-    files: Sides = None                     # ... and the files in it
-    mjcf: Sides = None                      # or the files themselves, relative to the hand file
-    name_prefix: SidePrefixes = None
+    files: PerSide[Name] = None             # ... and the files in it
+    mjcf: PerSide[Name] = None              # or the files themselves, relative to the hand file
+    name_prefix: PerSide[Str] = None        # each side's prefix of the model's names (empty: none)
     root_body: Name
-    mount: SideFrames
+    mount: PerSide[Frame]
     link_frame: Frame = None
     drop_joints: list[Name] = []
     joints: dict[str, Name] = Field(min_length=1, description="a mapping of model joint -> our joint")

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Generic, Literal, TypeVar
 
 from pydantic import Field, model_validator
 
@@ -26,6 +26,18 @@ Rgba = Annotated[list[Annotated[Number, Field(ge=0, le=1)]], Field(min_length=4,
 Friction = Annotated[list[NonNegativeNumber], Field(min_length=3, max_length=3)]
 Condim = Literal[CONDIMS]
 Range = Annotated[list[Angle], Field(min_length=2, max_length=2)]
+
+
+T = TypeVar("T")
+
+
+class PerSide(CatalogModel, Generic[T]):
+    """One value for each hand: `{right: ..., left: ...}`."""
+
+    keys_label: ClassVar[str] = "a side"
+
+    right: T
+    left: T
 
 
 class Frame(CatalogModel):

@@ -12,6 +12,7 @@ import numpy as np
 from pydantic import Field, ValidationInfo, field_validator
 
 from .base import CatalogModel, Int, Name, NonNegativeNumber, PositiveInt, PositiveNumber, Vec3
+from .robot_parts import PerSide
 
 TACTILE_GROUPINGS = ("side_shared", "side_specific", "per_finger")
 TACTILE_NORMAL_CONVENTIONS = ("inward", "outward")
@@ -51,19 +52,10 @@ class Pad(CatalogModel):
         return axis
 
 
-class SideAssets(CatalogModel):
-    """The surface asset of a group on each hand (the same name on both under side_shared)."""
-
-    keys_label: ClassVar[str] = "a side"
-
-    right: Name
-    left: Name
-
-
 class Group(CatalogModel):
     keys_label: ClassVar[str] = "a group key"
 
-    assets: SideAssets
+    assets: PerSide[Name]       # the surface asset on each hand (the same name on both under side_shared)
     pad: Pad
 
 
