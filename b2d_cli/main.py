@@ -220,7 +220,8 @@ def validate(episode) -> None:
               help="Control steps to record (recorder, replay, teleop; replay: 0 = a whole demonstration); "
                    "frames to retarget (retarget).")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
-              help="replay: also render with this many processes and report the speed-up.")
+              help="replay: also render with this many processes and report the speed-up; demos: record "
+                   "the seeds (with --embodiment: the cells) in this many processes.")
 @click.option("--episodes", default=4, show_default=True, type=click.IntRange(min=1),
               help="demos: demonstrations per setting.")
 @click.option("--setting", multiple=True, help="demos: only these setting keys (default: all 26); replay: the "
@@ -258,10 +259,10 @@ def bench(part, profile, steps, workers, episodes, setting, operator, embodiment
     elif part == "demos" and embodiment is not None:
         from teleop.demo_bench import run_cross_embodiment_demo_bench
         figures = run_cross_embodiment_demo_bench(embodiment, list(setting), episodes, demo_max_steps, operator,
-                                                  stop_when_decided=not all_seeds)
+                                                  stop_when_decided=not all_seeds, processes=workers)
     elif part == "demos":
         from teleop.demo_bench import run_demo_bench
-        figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator)
+        figures = run_demo_bench(episodes=episodes, only=list(setting) or None, operator=operator, processes=workers)
     elif part == "media":
         from episode_media.bench import run_media_bench
         figures = run_media_bench(profile=profile, steps=steps)

@@ -1,4 +1,4 @@
-"""Worker processes that do not outlive the process that started them.
+"""Worker processes that do not outlive the process that started them, and a map over them.
 
 A parallel render's workers kept rendering after their parent was killed (issue 23). On Linux the
 kernel sends a signal to a process whose parent dies, once it asks with prctl(PR_SET_PDEATHSIG);
@@ -8,11 +8,14 @@ elsewhere a daemon thread polls the parent's pid.
 from __future__ import annotations
 
 import ctypes
+import multiprocessing
 import os
 import signal
 import sys
 import threading
 import time
+from concurrent.futures import ProcessPoolExecutor
+from typing import Callable, Iterable, Iterator
 
 PR_SET_PDEATHSIG = 1
 POLL_S = 1.0
@@ -37,3 +40,17 @@ def _watch(parent_pid: int) -> None:
         os._exit(1)
 
     threading.Thread(target=poll, name="die-with-parent", daemon=True).start()
+
+
+def map_in_processes(fn: Callable, arguments: Iterable[tuple], processes: int) -> Iterator:
+    """``fn(*args)`` for each of ``arguments``, yielded in their order; with ``processes`` > 1 in that many
+    spawned processes that die with this one (``fn`` must be a module-level function), else here."""
+    if processes <= 1:
+        for args in arguments:
+            yield fn(*args)
+        return
+    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+        futures = [pool.submit(fn, *args) for args in arguments]
+        for future in futures:
+            yield future.result()

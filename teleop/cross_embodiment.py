@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from episodes.workers import map_in_processes
 from sim.embodiment.description import load_embodiment
 from sim.errors import UnknownNameError
 from sim.registry import SETTING_SEPARATOR, names, parse_setting_key, validate_name
@@ -214,9 +215,11 @@ def summarize(cells: list[dict], tasks: list[str], embodiments: list[str], seeds
 
 def run_cross_embodiment_bench(tasks: list[str], embodiments: list[str], seeds: int = 3,
                                max_steps: int | None = None, operator: str = DEFAULT_OPERATOR,
-                               stop_when_decided: bool = False, dry_run: bool = True, progress=None) -> dict:
-    """Every chosen task's plan on every chosen embodiment for ``seeds`` demonstration seeds. Names are
-    checked before anything runs; a task without a plan is listed as such and skipped."""
+                               stop_when_decided: bool = False, dry_run: bool = True, progress=None,
+                               processes: int = 1) -> dict:
+    """Every chosen task's plan on every chosen embodiment for ``seeds`` demonstration seeds, the cells in
+    ``processes`` processes (reported in order). Names are checked before anything runs; a task without a
+    plan is listed as such and skipped."""
     if operator not in OPERATORS:
         raise ValueError(f"operator: expected one of {list(OPERATORS)}, got {operator!r}")
     for t in tasks:
@@ -225,11 +228,11 @@ def run_cross_embodiment_bench(tasks: list[str], embodiments: list[str], seeds: 
         validate_name("embodiment", e)
     planned = [t for t in tasks if load_task(t).demo_plan]
     cells = []
-    for task in planned:
-        for embodiment in embodiments:
-            cells.append(run_cell(task, embodiment, seeds, max_steps, operator, stop_when_decided, dry_run))
-            if progress:
-                progress(cells[-1])
+    units = [(t, e, seeds, max_steps, operator, stop_when_decided, dry_run) for t in planned for e in embodiments]
+    for cell in map_in_processes(run_cell, units, processes):
+        cells.append(cell)
+        if progress:
+            progress(cell)
     return {"operator": operator, "seeds": seeds, "max_steps": max_steps, "stop_when_decided": stop_when_decided,
             "tasks": planned, "embodiments": embodiments,
             "without_plan": [t for t in tasks if t not in planned],

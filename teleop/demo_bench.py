@@ -17,43 +17,60 @@ import tempfile
 import time
 from pathlib import Path
 
+from episodes.workers import map_in_processes
 from sim.registry import paper_settings, parse_setting_key
 from sim.tasks import is_recordable
 from teleop.cross_embodiment import markdown_table, parse_embodiments, parse_tasks, run_cross_embodiment_bench
 from teleop.demos import DEFAULT_OPERATOR, record_demonstrations
 
 
-def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: str = DEFAULT_OPERATOR) -> dict:
+def record_one(task: str, embodiment: str, index: int, operator: str) -> dict:
+    """Demonstration seed ``index`` recorded in a temporary folder: its success, steps, error and seconds."""
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        (result,) = record_demonstrations(task, embodiment, 1, Path(tmp), first_index=index, operator=operator)
+    return {"success": result.success, "steps": result.steps, "error": result.error,
+            "seconds": time.perf_counter() - t0}
+
+
+def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: str = DEFAULT_OPERATOR,
+                   processes: int = 1) -> dict:
+    """Seeds 0..episodes-1 of every chosen paper setting with a plan, recorded in ``processes`` processes
+    (the same episodes whatever the number: each seed is its own scene and operator)."""
     for key in only or ():
         parse_setting_key(key)      # an unknown task or embodiment fails here, naming the valid ones
+    chosen = [s for s in paper_settings() if not only or s.key in only]
+    recordable = [s for s in chosen if is_recordable(s)]
+    units = [(s.task, s.embodiment, i, operator) for s in recordable for i in range(episodes)]
+    t0 = time.perf_counter()
+    results = iter(map_in_processes(record_one, units, processes))
+    by_setting = {s.key: [next(results) for _ in range(episodes)] for s in recordable}
+    wall = time.perf_counter() - t0
     rows, succeeded = [], 0
-    for setting in paper_settings():
-        if only and setting.key not in only:
-            continue
+    for setting in chosen:
         row = {"setting": setting.key, "episodes": episodes}
-        if not is_recordable(setting):
+        if setting.key not in by_setting:
             rows.append({**row, "successes": 0, "status": "no demo_plan"})
             continue
-        t0 = time.perf_counter()
-        with tempfile.TemporaryDirectory() as tmp:
-            results = record_demonstrations(setting.task, setting.embodiment, episodes, Path(tmp), operator=operator)
-        seconds = time.perf_counter() - t0
-        steps = sum(r.steps for r in results)
-        wins = sum(r.success for r in results)
-        errors = [r.error for r in results if r.error]
+        done = by_setting[setting.key]
+        seconds = sum(r["seconds"] for r in done)       # the setting's work, whichever process did it
+        steps = sum(r["steps"] for r in done)
+        wins = sum(r["success"] for r in done)
+        errors = [r["error"] for r in done if r["error"]]
         succeeded += wins > episodes / 2
         rows.append({**row, "successes": wins, "mean_steps": round(steps / episodes, 1),
                      "seconds": round(seconds, 2), "ms_per_step": round(1e3 * seconds / max(steps, 1), 2),
                      "status": f"{len(errors)} errors: {errors[0]}" if errors else "ok"})
     return {"settings": rows, "settings_with_majority_success": succeeded, "settings_listed": len(rows),
-            "operator": operator,
+            "operator": operator, "processes": processes, "wall_seconds": round(wall, 2),
             "note": f"scripted operator ({operator}), demonstration seeds 0..episodes-1 of each setting; success = the "
-                    "evaluator's stable success (reach-and-stop)"}
+                    "evaluator's stable success (reach-and-stop); a setting's seconds are its episodes' own, "
+                    "wall_seconds the whole run's"}
 
 
 def run_cross_embodiment_demo_bench(embodiments: str, settings: list[str], seeds: int = 3,
                                     max_steps: int | None = None, operator: str = DEFAULT_OPERATOR,
-                                    stop_when_decided: bool = True) -> dict:
+                                    stop_when_decided: bool = True, processes: int = 1) -> dict:
     """``b2d bench demos --embodiment ...``: ``settings`` are setting keys or task names (none: every task
     with a plan), ``embodiments`` 'all' or comma-separated names; both fail fast on an unknown name.
     A cell stops running seeds once its majority is decided (``stop_when_decided``; the CLI's
@@ -70,5 +87,5 @@ def run_cross_embodiment_demo_bench(embodiments: str, settings: list[str], seeds
               file=sys.stderr, flush=True)     # stdout carries the JSON
 
     result = run_cross_embodiment_bench(tasks, chosen, seeds, max_steps, operator,
-                                        stop_when_decided=stop_when_decided, progress=progress)
+                                        stop_when_decided=stop_when_decided, progress=progress, processes=processes)
     return {**result, "markdown": markdown_table(result)}     # the README's table, paper cells in bold

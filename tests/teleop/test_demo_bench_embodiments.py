@@ -64,6 +64,15 @@ def test_bench_runs_every_cell_and_tables_them():
     assert lines[2] == f"| {TASK} | **0/1** | 0/1 | 0 |"
 
 
+def test_cells_in_two_processes_are_the_cells_in_one():
+    """`--workers 2`: the same cells, in the same order, whichever process ran each."""
+    def without_time(result):
+        return [{k: v for k, v in c.items() if k != "cpu_s"} for c in result["cells"]]
+    one = run_cross_embodiment_bench([TASK], [PAPER, OTHER], seeds=1, max_steps=3, dry_run=False)
+    two = run_cross_embodiment_bench([TASK], [PAPER, OTHER], seeds=1, max_steps=3, dry_run=False, processes=2)
+    assert without_time(two) == without_time(one) and two["table"] == one["table"]
+
+
 def test_a_bad_cell_reports_its_error_and_the_bench_lists_tasks_without_a_plan():
     unplanned = next(t for t in names("tasks") if not load_task(t).demo_plan)
     cell = run_cell(unplanned, OTHER, seeds=2, max_steps=2, dry_run=False)
