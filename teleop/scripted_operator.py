@@ -60,7 +60,7 @@ class ScriptedOperator:
         self.ctrl_home = scene.layout.home_ctrl.copy()
         self.sides = {}
         self.link_angles: dict[str, float] = {}     # where earlier `turn` steps leave each link (planned)
-        self.held: dict[str, tuple] = {}     # hand -> (object, its centre from the wrist, its rotation): kept between steps
+        self.held: dict = {}     # hand -> plan_steps.held.HeldObject: what a step left in it for its next step
         # where plan steps leave the objects they move (and on or in what), and the control step by
         # which: (step, name, pos, on)
         self.moves: list[tuple[int, str, np.ndarray, str | None]] = []

@@ -50,7 +50,7 @@ def in_giving_hand(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
     it in the hand, or picked now (from above, or out of a container's side opening)."""
     held = take(op, item, name)
     if held is not None:
-        return held
+        return held.offset, held.rotation
     rotation = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).copy()
     if item.get("pick_from") == PLACE_FROM_FRONT:
         return take_out_front(op, data, item, name), rotation

@@ -115,7 +115,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         roll = 0.0 if grasp != SIDE_GRASP else SIDE_GRASP_ROLL_DEG * (1.0 if item["hand"] == "right" else -1.0)
         offset = grasp_and_lift(op, data, item, name, roll_deg=roll)     # object centre from the wrist, as held
     elif item.get("hold", False) or "place_offset" in item:
-        start, offset, obj_rot = None, holding[0].copy(), holding[1]
+        start, offset, obj_rot = None, holding.offset.copy(), holding.rotation
     else:
         raise SpecError(op.scene.task.source, "demo_plan", "a pour of a bottle the hand holds sets it down at "
                         "place_offset [x, y] of the table (it came from the other hand), or keeps it (hold: true)",

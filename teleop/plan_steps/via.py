@@ -39,7 +39,6 @@ from teleop.plan_steps.pour import upright_in_hand
 VIA_INSIDE_DEPTH_M = 0.025      # `inside`: the via point this far below the container's rim (a ladle's bowl dipped in)
 VIA_OVER_CLEARANCE_M = 0.03     # `over` and between stops: the carried object's lowest point this far above a top
 LIFTED_M = 0.01                 # an object this far above where it rested is in the hand (settle_in_hand)
-KEPT_BY_HOLD = "kept_by_hold"   # per hand (op.sides): what a `hold: true` left in it, for its next pick
 GRASP_FIELDS = ("grasp", "grasp_roll_deg", "grasp_point", "grasp_yaw", "approach_pitch_deg")
 VIA_DURATIONS = {"across": 100, "down": 60, "stay": 30, "up": 60}
 
@@ -141,8 +140,8 @@ def hold_over_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
     bounds = [first, len(tl.frames)]    # the hand's next pick of it extends them over the wait until it starts
     rest_z = float(op.object_pos(data, name)[2])
     op.on_frame_end(side, first - 1, settle_in_hand(op, side, name, offset, bounds, rest_z))
-    held.keep(op, item["hand"], name, offset, rotation)
-    side[KEPT_BY_HOLD] = (name, bounds, {k: item[k] for k in GRASP_FIELDS if k in item})
+    held.keep(op, item["hand"], name, offset, rotation, grasp={k: item[k] for k in GRASP_FIELDS if k in item},
+              settle=bounds)
 
 
 def _closing(frames, first: int) -> int | None:
@@ -180,13 +179,13 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         if item.get("grasp") == "pinch" and k is not None:
             ready = side["timeline"].frames[k - 1].hand.copy()
     else:
-        offset, rotation = holding
-        kept, bounds, grasp = side.pop(KEPT_BY_HOLD, (None, None, {}))
-        if kept == name:        # the hold's look moves the frames up to here too (the wait for `after`)
-            bounds[1] = len(side["timeline"].frames)
-            item = {**grasp, **item}    # let go as it was taken (a side grasp moves out along the palm's normal)
+        offset, rotation = holding.offset, holding.rotation
+        by_hold = holding.settle is not None
+        if by_hold:             # the hold's look moves the frames up to here too (the wait for `after`)
+            holding.settle[1] = len(side["timeline"].frames)
+            item = {**holding.grasp, **item}    # let go as it was taken (a side grasp moves out along the palm's normal)
         side["timeline"].add(DURATIONS["hold"])     # a frame of its own for the carry to raise (not the hold's)
-        if kept == name:        # where it sits in the hand now, before it moves on
+        if by_hold:             # where it sits in the hand now, before it moves on
             settle = [len(side["timeline"].frames), None]
             op.on_frame_end(side, settle[0] - 1, settle_in_hand(op, side, name, offset, settle,
                                                                 float(op.object_pos(data, name)[2])))
@@ -216,8 +215,7 @@ def planner(inner: Callable) -> Callable:
     """The `pick` planner: this module's for a pick with `via` or `hold: true`, or of what a `hold: true`
     left in the hand, else ``inner``."""
     def planned(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
-        kept = op.sides[item["hand"]].get(KEPT_BY_HOLD, (None,))[0]
-        if "via" in item or item.get("hold", False) or kept == item["pick"]:
+        if "via" in item or item.get("hold", False) or held.kept_by_hold(op, item["hand"], item["pick"]):
             plan(op, data, item)
         else:
             inner(op, data, item)

@@ -81,8 +81,8 @@ def test_the_giver_lets_go_only_once_the_taker_has_closed(tmp_path):
     held = [f for f in lf if f.end_step <= opened.end_step - 20 and f.end_step >= closed.end_step - 90]
     assert all(np.allclose(f.pos, held[0].pos) for f in held)  # the giver holds still while the taker closes
     at = np.array(GIVE["at"]) + [0.0, 0.0, scene.table_height]
-    assert list(op.held) == ["right"] and op.held["right"][0] == "wine_bottle"
-    assert np.allclose(closed.pos + op.held["right"][1], at, atol=1e-9)     # the taker closes round it there
+    assert list(op.held) == ["right"] and op.held["right"].name == "wine_bottle"
+    assert np.allclose(closed.pos + op.held["right"].offset, at, atol=1e-9)     # the taker closes round it there
 
 
 def test_steps_after_a_handover_start_from_holding(tmp_path):

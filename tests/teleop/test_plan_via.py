@@ -97,7 +97,7 @@ def test_a_held_bowl_stays_lifted_in_the_hand_where_planned():
     the hand), and the operator remembers it in the left hand for the hand's next step (direct joint
     path, seed 0)."""
     scene, data, op = _operator(dict(HOLD))
-    assert op.held["left"][0] == "bowl"
+    assert op.held["left"].name == "bowl" and op.held["left"].settle is not None      # kept by the hold
     bowl = scene.object_body_ids["bowl"]
     z0 = float(data.xpos[bowl][2])
     end = op.sides["left"]["timeline"].frames[-2].end_step       # the last frame is the way home
