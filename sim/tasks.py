@@ -138,7 +138,7 @@ def _mass(path, where, obj: TaskObject, parts) -> float:
     return obj.mass if obj.mass is not None else DEFAULT_MASS_KG
 
 
-def _parse_object(path, name, raw: dict, obj: TaskObject, zones, earlier) -> ObjectSpec:
+def _parse_object(path, name, obj: TaskObject, zones, earlier) -> ObjectSpec:
     """One object: the schema checked its keys, types and ranges; here its geometry and references."""
     where = f"objects.{name}"
     parts, cavity = _geometry(path, where, obj)
@@ -199,7 +199,7 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
     points = raw.get("points") or {}
     objects: dict[str, ObjectSpec] = {}
     for n, obj in m.objects.items():
-        objects[n] = _parse_object(path, n, raw["objects"][n], obj, zones, dict(objects))
+        objects[n] = _parse_object(path, n, obj, zones, dict(objects))
     table = m.table or Table()
     embodiment = m.paper_embodiment
     if embodiment and embodiment not in names("embodiments"):
