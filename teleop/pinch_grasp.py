@@ -54,9 +54,15 @@ def pinch_rows(hand_name: str, fingers: tuple[str, ...]) -> tuple[int, list[int]
 
 
 @functools.lru_cache(maxsize=None)
-def pinch_grasp(hand_name: str) -> PinchGrasp:
-    """The first finger set whose pads meet the thumb's, else the set that comes closest."""
-    options = [solve_pinch(hand_name, fingers) for fingers in FINGER_SETS]
+def pinch_grasp(hand_name: str, fingers: tuple[str, ...] | None = None) -> PinchGrasp:
+    """The first finger set whose pads meet the thumb's, else the set that comes closest. ``fingers`` (a
+    plan step's `pinch_fingers`): that set, whose pads may not reach the thumb's; they "meet" within
+    MEET_M of the closest they come, so the mid-range start is taken first there too."""
+    if fingers:
+        closest = solve_pinch(hand_name, fingers).gap_m
+        options = [solve_pinch(hand_name, fingers, meet_m=closest + MEET_M)]
+    else:
+        options = [solve_pinch(hand_name, f) for f in FINGER_SETS]
     meeting = [g for g in options if g.gap_m <= MEET_M]
     grasp = meeting[0] if meeting else min(options, key=lambda g: g.gap_m)
     grasp.close.flags.writeable = grasp.centre.flags.writeable = False     # cached: shared by every caller
@@ -88,9 +94,10 @@ def damped_step(kin, q: np.ndarray, cols, A: np.ndarray, r: np.ndarray, damping:
     return q, q_gap, min(damping * 10, 1e6)
 
 
-def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
+def solve_pinch(hand_name: str, fingers: tuple[str, ...], meet_m: float = MEET_M) -> PinchGrasp:
     """Levenberg-Marquardt from the middle of the ranges, then from the best few of a seeded random
-    sample (one start gets caught in local minima on the hands with little thumb opposition)."""
+    sample (one start gets caught in local minima on the hands with little thumb opposition); the
+    first start whose pads come within ``meet_m`` is taken."""
     kin = hand_kinematics(hand_name)
     thumb, tips = pinch_rows(hand_name, fingers)
     moving, folded = moving_and_folded(kin, [thumb, *tips])
@@ -112,7 +119,7 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...]) -> PinchGrasp:
             q, q_gap, damping = damped_step(kin, q, moving, A, r, damping, gap, q_gap)
         if q_gap < best_gap:
             best, best_gap = q.copy(), q_gap
-        if best_gap <= MEET_M:     # the first start that meets: mid-range first, the most natural pinch
+        if best_gap <= meet_m:     # the first start that meets: mid-range first, the most natural pinch
             break
     meet = kin.points(best)[[thumb, *tips]].mean(axis=0)
     return PinchGrasp(centre=kin.hand.wrist_site.to_local(meet), close=best, gap_m=float(best_gap), fingers=fingers)
@@ -124,13 +131,14 @@ def hand_kinematics(hand_name: str) -> HandKinematics:
     return HandKinematics(hand_name)
 
 
-def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float) -> tuple[np.ndarray, np.ndarray]:
+def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float,
+                   fingers: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pre-shape to come down with: actuator targets on the way from ``open_`` to ``close``, as
     closed as possible while the thumb pad stays ``width_m`` from every pinching pad, and the point
     midway between the thumb pad and the pinching pads there (wrist-site frame, right hand), where
     the object's centre goes so that both sides close in on it together."""
     kin = hand_kinematics(hand_name)
-    thumb, tips = pinch_rows(hand_name, pinch_grasp(hand_name).fingers)
+    thumb, tips = pinch_rows(hand_name, pinch_grasp(hand_name, fingers).fingers)
     for s in np.linspace(1.0, 0.0, 21):      # ends at s = 0, the open hand, if nothing is wide enough
         q = open_ + s * (close - open_)
         P = kin.points(q)
@@ -165,10 +173,10 @@ def fingertip_rows(hand_name: str, keypoints: tuple[str, ...] | None = None) -> 
 
 
 @functools.lru_cache(maxsize=None)
-def pinch_axis_in_site_frame(hand_name: str) -> np.ndarray:
+def pinch_axis_in_site_frame(hand_name: str, fingers: tuple[str, ...] | None = None) -> np.ndarray:
     """Unit vector from the thumb pad to the pinching pads (right hand, wrist-site frame), with the
     hand half closed: the direction across which a pinched object must fit."""
-    grasp = pinch_grasp(hand_name)
+    grasp = pinch_grasp(hand_name, fingers)
     kin = hand_kinematics(hand_name)
     thumb, *tips = fingertip_rows(hand_name, _pinch_keypoints(grasp.fingers))
     P = fingertips_in_site_frame(hand_name, 0.5 * (kin.home + grasp.close))

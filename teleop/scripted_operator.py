@@ -166,12 +166,13 @@ class ScriptedOperator:
         if height > pos[2]:
             tl.add(DURATIONS["descend"], pos=pos)
 
-    def look_again(self, side: dict, name: str, data, first: int, end: int) -> None:
+    def look_again(self, side: dict, name: str, data, first: int, end: int, planned=None) -> None:
         """When the hand sets off towards ``name`` (the start of frame ``first``), the operator looks
         where it is now (an earlier step may have pushed or nudged it) and moves frames
-        ``first``..``end`` with it (horizontally: heights come from the object's size)."""
-        side["reaims"].append((side["timeline"].frames[first - 1].end_step, name, self.object_pos(data, name),
-                               slice(first, end)))
+        ``first``..``end`` with it (horizontally: heights come from the object's size); ``planned``:
+        where those frames expect it (default: where it is while planning)."""
+        planned = self.object_pos(data, name) if planned is None else np.asarray(planned, float)
+        side["reaims"].append((side["timeline"].frames[first - 1].end_step, name, planned, slice(first, end)))
 
     @staticmethod
     def on_frame_end(side: dict, frame: int, adjust) -> None:

@@ -27,6 +27,7 @@ PLAN_GRASPS = ("power", "pinch")
 SIDE_GRASP = "side"         # the hand's palm grasp turned to the side, thumb up: a tall object (a bottle, a drill's grip)
 PICK_GRASPS = (*PLAN_GRASPS, "flat_pinch", SIDE_GRASP)   # flat_pinch: the fingertips to the table beside a thin object lying flat
 GRASP_YAW_ACROSS = "across"   # grasp_yaw: the hand turned to close across the object's narrow side
+PINCH_FINGERS = ("index", "middle", "ring", "little")   # pinch_fingers: what a pad pinch's thumb may close against
 PLACE_FROM_FRONT = "front"
 PLACE_FROM = ("above", PLACE_FROM_FRONT)   # lowered from above, or slid in through a side opening
 WAIT_RANGE_S = (0.0, 60.0)
@@ -43,6 +44,7 @@ POUR_DEFAULT_GRASP = SIDE_GRASP
 TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
 VIA_KINDS = ("inside", "over")      # a pick's via stops: into a container's cavity, below its rim; above an object
 VIA_TIMES_RANGE = (1, 10)
+SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed past each other, up to 5 cm
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -179,6 +181,11 @@ class GraspFields(CatalogModel):
                                                    f"{APPROACH_PITCH_RANGE_DEG[1]:g}]")
     grasp_yaw: Number | Literal["across"] = 0.0     # checked whole by _yaw
     grasp_point: ObjectPoint = None
+    # a pad pinch's fingers against the thumb (default the hand's own choice: teleop/pinch_grasp.py)
+    pinch_fingers: Annotated[list[Literal[PINCH_FINGERS]], Field(min_length=1)] = None
+    # a flat pinch's closed tips aimed this far past each other: a firmer hold (teleop/pinch_squeeze.py)
+    grasp_squeeze_m: Number = Field(None, ge=SQUEEZE_RANGE_M[0], le=SQUEEZE_RANGE_M[1],
+                                    description=f"metres in [{SQUEEZE_RANGE_M[0]:g}, {SQUEEZE_RANGE_M[1]:g}]")
 
     @field_validator("grasp", mode="before")
     @classmethod
@@ -203,6 +210,27 @@ class GraspFields(CatalogModel):
             raise ValueError(words)
         return yaw
 
+    @field_validator("pinch_fingers", mode="before")
+    @classmethod
+    def _pad_pinch_fingers(cls, fingers, info: ValidationInfo):
+        if info.data.get("grasp") != "pinch":
+            raise ValueError("no pinch_fingers without grasp: pinch (the fingers the thumb's pad closes against)")
+        return fingers
+
+    @field_validator("pinch_fingers")
+    @classmethod
+    def _distinct_fingers(cls, fingers: list[str]) -> list[str]:
+        if len(set(fingers)) != len(fingers):
+            raise ValueError(f"distinct fingers from {list(PINCH_FINGERS)}")
+        return fingers
+
+    @field_validator("grasp_squeeze_m", mode="before")
+    @classmethod
+    def _flat_pinch_only(cls, depth, info: ValidationInfo):
+        if info.data.get("grasp") != "flat_pinch":
+            raise ValueError("no grasp_squeeze_m without grasp: flat_pinch (it presses the pinch's tips past each other)")
+        return depth
+
     @field_validator("grasp_point", mode="before")
     @classmethod
     def _not_with_a_pinch(cls, point, info: ValidationInfo):
@@ -214,17 +242,21 @@ class GraspFields(CatalogModel):
 
 class PickStep(PlanStep, GraspFields):
     """{hand, pick, place, [place_offset], [place_from], [grasp], [approach_pitch_deg], [grasp_yaw],
-    [grasp_point], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
+    [grasp_point], [grasp_squeeze_m], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
     or `table` with place_offset the spot on the table top). place_from: front slides it in level through the side a
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
-    object's frame; grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
-    its centre or of grasp_point (a spatula's handle clear of its blade); grasp: side is the palm grasp
+    object's frame; pinch_fingers [index, middle, ...] are the fingers a pad pinch closes the thumb against
+    (default the hand's own set, teleop/pinch_grasp.py); grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
+    its centre or of grasp_point (a spatula's handle clear of its blade), grasp_squeeze_m (metres) aiming its
+    closed tips that far past each other for a firmer hold (a heavy tool); grasp: side is the palm grasp
     from the side, thumb up, around an upright part (a drill's grip under its motor, a bottle), turned
     grasp_roll_deg about the fingers (default 90: thumb up). place_axis [x, y, z] (object frame) is turned
     on the way to point straight down and lowered that end first (a marker stood up in a pen cup; place_offset's
-    dz then places that end). via [{inside: <container>} | {over: <object>}, ...] takes the carried object's
-    via_point through those stops, via_times rounds, on its way (a ladle into a pot, then over a bowl);
+    dz then places that end); place_tilt_deg turns it that many degrees short of straight down, leaning (a thin
+    pen slips out of a two-tip pinch as the turn nears vertical; the cup's wall stands it up as it drops in).
+    via [{inside: <container>} | {over: <object>}, ...] takes the carried object's via_point through those
+    stops, via_times rounds, on its way (a ladle into a pot, then over a bowl);
     hold: true keeps it in the hand over `place` (dz: its bottom above the table) for the hand's next pick
     of it (teleop/plan_steps/via.py)."""
 
@@ -238,7 +270,9 @@ class PickStep(PlanStep, GraspFields):
     grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
                                    description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
     place_axis: ObjectAxis = None           # turned on the way to point straight down (teleop/plan_steps/axis_place.py)
+    place_tilt_deg: Number = Field(None, ge=0.0, le=60.0, description="degrees in [0, 60]")  # place_axis turned that far short of down
     hold: Bool = False                      # kept in the hand over `place` for its next step (plan_steps/via.py)
+    from_plan: Bool = False                 # grasped where an earlier step leaves it (a drag), not where it lay
     via: list[ViaStop] = Field(None, min_length=1)  # waypoints on the way to `place`
     via_times: Int = Field(None, ge=VIA_TIMES_RANGE[0], le=VIA_TIMES_RANGE[1],
                            description=f"a whole number of rounds in [{VIA_TIMES_RANGE[0]}, {VIA_TIMES_RANGE[1]}]")
@@ -278,6 +312,13 @@ class PickStep(PlanStep, GraspFields):
         if info.data.get("place_from") == PLACE_FROM_FRONT:
             return _front_container(place, info)
         return _object(place, info, extra=(TABLE_TARGET,))
+
+    @field_validator("place_tilt_deg", mode="before")
+    @classmethod
+    def _with_place_axis(cls, tilt, info: ValidationInfo):
+        if info.data.get("place_axis") is None:
+            raise ValueError("no place_tilt_deg without place_axis (the axis it leaves leaning)")
+        return tilt
 
     @field_validator("place_axis", mode="before")
     @classmethod
@@ -402,11 +443,13 @@ class PourStep(PlanStep, GraspFields):
 
 
 class TurnStep(PlanStep):
-    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [return_home], [after], [wait_s]}: swing a
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [return_home], [approach_over], [after],
+    [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
     on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
     speed (m/s) is how fast the hand's contact moves along the arc (default 0.09); return_home: false leaves
-    the hand risen off the link where it let go, so the next step sets off from there."""
+    the hand risen off the link where it let go, so the next step sets off from there; approach_over: true
+    brings the hand to the link from above its top."""
 
     turn: Name
     to: Number
@@ -416,6 +459,9 @@ class TurnStep(PlanStep):
                                       f"{TURN_SPEED_RANGE_M_S[1]:g}]")
     # false: the hand stays where it rose off the link (a tall door pulled open stands between it and home)
     return_home: Bool = True
+    # true: the hand comes to the link from above its top (a door pulled open past square, shut again from its
+    # outer side: the hand rises over it rather than through it)
+    approach_over: Bool = False
 
     @field_validator("turn", mode="before")
     @classmethod
@@ -437,7 +483,7 @@ class TurnStep(PlanStep):
 
 class StrikeStep(PlanStep, GraspFields):
     """{hand, strike, tool, strike_point, place, [place_offset], [grasp], [grasp_point], [grasp_yaw],
-    [approach_pitch_deg], [after], [wait_s]}: pick the tool up (grasp fields as for `pick`), strike the
+    [grasp_squeeze_m], [approach_pitch_deg], [after], [wait_s]}: pick the tool up (grasp fields as for `pick`), strike the
     target object once with the tool's strike_point (tool frame, on the tool), then put the tool onto or
     into `place` (an object, or `table` with place_offset a spot of the table top). grasp: flat_pinch takes a
     tool lying flat (a hammer by its handle, grasp_point near its balance point)."""

@@ -23,7 +23,8 @@ from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yawed)
-from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
+from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape
+from teleop.pinch_squeeze import squeezed
 from teleop.plan_steps.flat_place import flat_place
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.part_pinch import part_width
@@ -59,14 +60,19 @@ def approach_pitch(item: dict) -> float:
 
 
 @functools.lru_cache(maxsize=None)
-def level_pinch_pitch(hand_name: str) -> float:
+def level_pinch_pitch(hand_name: str, fingers: tuple[str, ...] | None = None) -> float:
     """The finger pitch (degrees, 0..60) that levels the hand's pinch axis, so that the thumb and
     the fingers come down to the same height beside a low object instead of the lower one landing
     on it; 0 where the axis already falls towards the fingers (pitching would only tilt it more)."""
-    axis = pinch_axis_in_site_frame(hand_name)
+    axis = pinch_axis_in_site_frame(hand_name, fingers)
     pitches = np.arange(0.0, 61.0)
     elevation = np.array([(pitched_palm_down(p) @ axis)[2] for p in pitches])
     return float(pitches[np.argmin(np.abs(elevation))]) if elevation[0] > 0 else 0.0
+
+
+def pinch_fingers(item: dict) -> tuple[str, ...] | None:
+    """A pad pinch's `pinch_fingers` (None: the hand's own pinch, teleop/pinch_grasp.py)."""
+    return tuple(item["pinch_fingers"]) if item.get("pinch_fingers") else None
 
 
 def grasp_kind(item: dict) -> str:
@@ -129,6 +135,8 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     offset = np.array([*((hand_rot @ mirror(centre))[:2] - at[:2]), obj_z - (bottom + below[0])])
     per = (DURATIONS["close"] + DURATIONS["close_late"]) // FLAT_PINCH_STAGES
     closing = [(per, q, bottom + b) for q, b in zip(shapes[1:], below[1:])]
+    if item.get("grasp_squeeze_m"):     # the last stage presses the tips past each other (the wrist as planned)
+        closing[-1] = (per, np.clip(squeezed(hand, close, ready, item["grasp_squeeze_m"]), lo, hi), closing[-1][2])
     return hand_rot, ready, offset, closing
 
 
@@ -160,7 +168,7 @@ def grasp_yaw(item: dict, hand_rot: np.ndarray, hand_name: str, body_rot: np.nda
     if value != GRASP_YAW_ACROSS:
         return float(np.radians(value))
     if pinch:
-        axis = pinch_axis_in_site_frame(hand_name)
+        axis = pinch_axis_in_site_frame(hand_name, pinch_fingers(item))
         closing = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
     else:
         closing = hand_rot @ (PALM_DOWN.T @ FORWARD)
@@ -208,7 +216,7 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
     half_z = obj.half_extents[2]
     pinch = grasp_kind(item) == "pinch"
     if pinch and "approach_pitch_deg" not in item:
-        hand_rot = pitched_palm_down(level_pinch_pitch(side["hand"]))
+        hand_rot = pitched_palm_down(level_pinch_pitch(side["hand"], pinch_fingers(item)))
     else:
         hand_rot = pitched_palm_down(approach_pitch(item))
     if roll_deg:
@@ -221,16 +229,21 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         hand_rot, ready, offset, closing = flat_pinch(op, data, item, name)
     elif pinch:
         # come down with the pads spread wider than the object, its centre midway between them
-        axis = pinch_axis_in_site_frame(side["hand"])
+        fingers = pinch_fingers(item)
+        axis = pinch_axis_in_site_frame(side["hand"], fingers)
         axis = hand_rot @ (mirror_vec(axis) if item["hand"] == "left" else axis)
         width = 2.0 * float(np.abs(body_rot.T @ axis) @ obj.half_extents) + PINCH_SPREAD_MARGIN_M
         at = body_rot @ grasp_point(item)     # with a grasp_point: the pads close on the part there (part_pinch.py)
         if "grasp_point" in item:
             width = part_width(op.scene.model, data, op.scene.object_body_ids[name], op.object_pos(data, name) + at,
                                axis) + PINCH_SPREAD_MARGIN_M
-        ready, centre = pinch_preshape(side["hand"], open_, side["pinch_close"], width)
+        close = side["pinch_close"]
+        if fingers:     # the step's own fingers: their pads towards the thumb's, within the actuator ranges
+            close = np.clip(pinch_grasp(side["hand"], fingers).close,
+                            *op.scene.model.actuator_ctrlrange[side["hand_ids"]].T)
+        ready, centre = pinch_preshape(side["hand"], open_, close, width, fingers)
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre) - at
-        closing = [(DURATIONS["close"] + DURATIONS["close_late"], side["pinch_close"], None)]
+        closing = [(DURATIONS["close"] + DURATIONS["close_late"], close, None)]
     else:
         at = body_rot @ grasp_point(item)
         if side_in_m:       # moved in level: the palm stops just short of the part at the grasp point
@@ -247,7 +260,10 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         closing = [(DURATIONS["close"], op.power(side, WALL), None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
         ready = open_
     hand_quat = quat(hand_rot)
-    grasp = op.object_pos(data, name) - offset
+    # `from_plan: true`: where an earlier step of the plan leaves it (a drag); planned from where it lay, the
+    # look below moved the grasp but not the carry's transit, which rose from there and swung the hand back
+    here = op.planned_place(data, name, tl.end)[0] if item.get("from_plan") else op.object_pos(data, name)
+    grasp = here - offset
     reach = len(tl.frames)
     beside = grasp - side_in_m * (hand_rot @ PALM_NORMAL)     # out from the object, along the palm's normal
     above = APPROACH_HEIGHT_M
@@ -265,7 +281,7 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
             tl.add(duration, hand=targets, pos=np.array([*grasp[:2], wrist_z]))
     tl.add(DURATIONS["hold"])
     tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * UP)
-    op.look_again(side, name, data, reach, len(tl.frames))
+    op.look_again(side, name, data, reach, len(tl.frames), planned=here)
     return offset
 
 

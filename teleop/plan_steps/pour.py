@@ -153,6 +153,9 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         op.set_off(side, data, item, POUR_DURATIONS["to_target"], pos=over, carried=(name, offset))
     tl.add(POUR_DURATIONS["tilt"], pos=tipped, quat=quat(T @ hand_rot))
     tl.add(POUR_DURATIONS["pour"])
+    if holding is not None:     # handed over: it sits in this hand as the giver left it, not as planned
+        op.on_frame_end(side, len(tl.frames) - 3, mouth_over_target(op, side, name, target, offset + mouth,
+                                                                    range(len(tl.frames) - 2, len(tl.frames))))
     tl.add(POUR_DURATIONS["untilt"], pos=over, quat=quat(hand_rot))
     untilted = len(tl.frames) - 1
     if target in op.scene.task.objects:     # an object may have been nudged since; a point stays put
@@ -164,6 +167,29 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         set_down(op, data, item, name, offset, hand_rot, start)
     op.on_frame_end(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
                                                     range(untilted + 1, len(tl.frames))))
+
+
+def mouth_over_target(op: PlanningOperator, side: dict, name: str, target: str, planned: np.ndarray, frames: range):
+    """The look before tipping a bottle another hand gave: it hangs in this hand leaning or lower than
+    planned (``planned``: the mouth from the wrist, world, as the handover planned it), so its mouth would
+    miss the target. A person looks where the mouth is in their hand and moves the hand so that, tipped
+    (``frames``: the tilt and its hold), the mouth comes over the target (where it is now; level moves only)."""
+    obj = op.scene.task.objects[name]
+
+    def adjust(data: mujoco.MjData) -> None:
+        body = op.scene.object_body_ids[name]
+        wrist_rot = data.site_xmat[side["wrist_site_id"]].reshape(3, 3)
+        mouth = data.xpos[body] + data.xmat[body].reshape(3, 3) @ mouth_local(obj)
+        in_hand = wrist_rot.T @ (mouth - data.site_xpos[side["wrist_site_id"]])
+        if np.linalg.norm(in_hand) > np.linalg.norm(planned) + NOT_IN_HAND_M:      # not in the hand any more
+            return
+        aim = aim_point(op, data, target) if target in op.scene.task.objects else point_world(op, target)[:2]
+        R = np.zeros(9)
+        for frame in side["timeline"].frames[frames.start:frames.stop]:
+            mujoco.mju_quat2Mat(R, frame.quat)
+            miss = aim - (frame.pos + R.reshape(3, 3) @ in_hand)[:2]
+            frame.pos = frame.pos + np.array([miss[0], miss[1], 0.0])
+    return adjust
 
 
 def set_down(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray,

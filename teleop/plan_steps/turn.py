@@ -34,6 +34,7 @@ from teleop.operator_motion import APPROACH_HEIGHT_M, DURATIONS, UP, SideTimelin
 from teleop.pinch_grasp import fingertip_rows, fingertips_in_site_frame
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.palm_push import PALM_REACH, finger_tips, innermost, palm_frame, palm_point, palm_turns
+from teleop.transit import CLEARANCE_M, hand_outline
 
 
 TILTS_DEG = (45.0, 30.0, 15.0, 0.0)  # fingers tilted from the push direction towards the hinge: at first the tips
@@ -133,8 +134,18 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     back = -first[1][:, 2] if along_axis else link.radial(faces[radii[0]])   # in along the fingers, or from beyond the free edge
     if palm_from is not None and not pull:      # ... a push along the axis: both, clear of what the link stands on
         back = (back + link.radial(faces[radii[0]])) / np.linalg.norm(back + link.radial(faces[radii[0]]))
-    op.set_off(side, data, item, DURATIONS["approach"], pos=first[0] + APPROACH_HEIGHT_M * back, quat=quat(first[1]),
-               hand=side["open"])
+    approach = first[0] + APPROACH_HEIGHT_M * back
+    if item.get("approach_over", False):
+        # opt-in: first to above the link's top, over whatever is in the way, the link included (a door pulled
+        # open past square stands between the hand and its outer side, where its bar is), then down to it
+        lowest = float(np.min((hand_outline(side["hand"], item["hand"], side["open"]) @ first[1].T)[:, 2]))
+        above = approach.copy()
+        above[2] = max(approach[2], link.top(start) + CLEARANCE_M - lowest)
+        op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=above, quat=quat(first[1]),
+                   hand=side["open"])
+        tl.add(DURATIONS["descend"], pos=approach)
+    else:
+        op.set_off(side, data, item, DURATIONS["approach"], pos=approach, quat=quat(first[1]), hand=side["open"])
     tl.add(DURATIONS["descend"], pos=first[0])
     previous, previous_angle, previous_R = (faces[radii[0]], first[0]), start, first[1]
     for angle, radius, tilt in zip(arc, radii, tilts):
@@ -157,11 +168,12 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     tl.add(DURATIONS["retreat"], pos=pos)
     tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
     # back to where the hand rests: the arm leaves the pose it stretched into around the link; unless
-    # `return_home: false`: a door pulled open past square stands between the hand and home (the way home
-    # shoves it back), so the hand waits there for its next step
-    if item.get("return_home", True):
-        tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
+    # `return_home: false`: the hand waits where it rose off the link, and its next step sets off from there
     op.link_angles[item["turn"]] = link.rest_angle(target)
+    if item.get("return_home", True):
+        # over whatever is in the way, the link as it was left included (a tall door pulled open past
+        # square stands between the hand and home: teleop/transit.py)
+        op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
 
 
 def _solve(kin, pos: np.ndarray, R: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -213,6 +225,10 @@ class Hinge:
         # the pushed face looks against the push: the hand should be on that side of the edge
         self.handle = max(edges, key=lambda e: float(-way * self.tangent(e) @ (hand - e)))
         self.handle_radius = float(np.linalg.norm(self.radial_vec(self.handle)))
+
+    def top(self, angle: float) -> float:
+        """The link's highest point (world z) at joint ``angle``."""
+        return max(float(self.rotated(c, angle - self.angle)[2]) for g in self.geoms for c in self._corners(g))
 
     def radial_vec(self, p: np.ndarray) -> np.ndarray:
         """From the hinge axis to ``p``, perpendicular to it."""

@@ -75,10 +75,11 @@ def test_the_object_slides_in_level_and_the_open_hand_draws_back_out(tmp_path):
     scene, data, op = _planned(tmp_path, place_offset=[dx, -0.05])
     side = op.sides["right"]
     frames = side["timeline"].frames
-    offset = side["corrections"][-1][2]             # the object's centre from the wrist, as held
     opened = next(k for k in range(1, len(frames)) if np.array_equal(frames[k].hand, side["open"])
                   and not np.array_equal(frames[k - 1].hand, side["open"]))
     front, slide, place, rise, back = (frames[opened + k].pos for k in (-3, -2, -1, 1, 2))
+    # the object's centre from the wrist, as held: where the plan leaves it, less the release keyframe
+    offset = next(p for _, n, p, on in op.moves if n == "bowl" and on == "microwave") + RELEASE_GAP_M * UP - place
     mw = scene.object_body_ids["microwave"]
     task = scene.task
     microwave = task.objects["microwave"]

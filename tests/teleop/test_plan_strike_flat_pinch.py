@@ -17,7 +17,8 @@ from teleop.recorder import EpisodeRecording, home
 
 TASK, EMBODIMENT = "screwdriver_box_hammer", "ur5_rh56dfx"
 STEP = {"hand": "left", "strike": "wood_block", "tool": "hammer", "strike_point": [0.15, 0.0, -0.018],
-        "place": "box", "grasp": "flat_pinch", "grasp_point": [0.05, 0.0, 0.0]}
+        "place": "box", "grasp": "flat_pinch", "grasp_point": [0.05, 0.0, 0.0],
+        "grasp_squeeze_m": 0.03}     # the tips pressed past each other: it slides out of a bare meeting (test_plan_grasp_squeeze.py)
 
 
 def _plan(task, **fields):

@@ -92,4 +92,5 @@ def _fridge(tmp_path, **fields):
 
 def test_a_tall_door_pulled_open_stays_open_when_the_hand_stays(tmp_path):
     assert _fridge(tmp_path, return_home=False) > 1.6
-    assert _fridge(tmp_path) < 1.3, "the way home shoves the door back (why the field exists)"
+    # going home it rises over the door as it now stands (teleop/transit.py), where it once shoved it back
+    assert _fridge(tmp_path) > 1.5, "the way home goes over the door, not through it"
