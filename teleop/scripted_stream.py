@@ -30,18 +30,19 @@ The other keypoints come from the parametric human hand (``streams/human_hand.py
 whose tip is nearest, so every frame looks like a hand to anything that reads all 21 points.
 
 Pinches: DexPilot reads a thumb tip within ``project_dist`` (3 cm, human scale) of a finger's as a
-pinch and pulls the two robot tips together, which is what the plan's grasps ask for anyway: their
-targets lie inside the object so the servos squeeze it (pinch grasps close towards pads that
-meet; several hands' power grasps end 6-30 mm apart). Measured since: where the plan keeps the
-tips apart the pull opens the fingers instead (the RH5DG2's power grasp 0.38 rad short, its bottle
-slips; tests/teleop/test_stream_closure.py); ``PLAN_PINCH_RETARGET`` pinches only where the plan's
-pads meet and returns the plan's joints on every hand whose fingertips fix them. But two fingers
-pinching the thumb together are kept ``eta2`` = 3 cm apart, so that a person's tripod does not make
-robot fingers collide; the plan's tripod pinch (all three pads towards one point inside the ball)
-then spread its fingers and rolled the ping-pong ball away (ball_box_loading__ur5_wuji: 0/3, direct
-joint path 2/3). The scripted person's retargeter therefore lets them meet (``SCRIPTED_RETARGET``;
-3/3). Keeping the thumb out of the pinch zone instead left it 36 mm from the index tip, too far to
-hold a golf ball.
+pinch and pulls the two robot tips together (weight 200). The scripted person pinches only where
+the plan's pads meet (``project_dist`` 1 cm, escape 2 cm; the pad pinch's pads meet within 5 mm):
+at 3 cm the pull also fired on grasps whose tips the plan keeps 6-30 mm apart (a power grasp's
+fingers curled past the thumb, the pad pinch's folded fingers, the flat pinch's pads behind its
+tips) and opened the fingers: the RH5DG2's power grasp 0.38 rad short of its 1.32 (its 1.2 kg bottle
+slipped), the Revo2's flat pinch 0.24 rad off (its 5 mm pen lifted 3 cm instead of 14). With exact
+fingertips and no stray pinch, DexPilot returns the plan's joints on every hand whose fingertips fix
+them (tests/teleop/test_stream_closure.py). Two fingers pinching the thumb together are kept
+``eta2`` = 3 cm apart in a live session, so that a person's tripod does not make robot fingers
+collide; the plan's tripod pinch (all three pads towards one point inside the ball) then spread
+its fingers and rolled the ping-pong ball away (ball_box_loading__ur5_wuji: 0/3, direct joint path
+2/3). The scripted person's retargeter therefore lets them meet (3/3). Keeping the thumb out of the
+pinch zone instead left it 36 mm from the index tip, too far to hold a golf ball.
 
 Latency: DexPilot low-passes the keypoints and the joint targets (``retarget/filters.py``), which
 a live operator feels as a constant lag and, with practice, moves ahead of. The scripted person
@@ -74,19 +75,12 @@ NOMINAL_PERIOD_NS = NS_PER_S // physics.CONTROL_HZ      # one frame per control 
 CURL_GRID = np.linspace(0.0, 1.0, 41)
 OPPOSITION_GRID = np.linspace(0.0, 1.0, 21)
 REACH_IK_ITERS = 30     # as the direct joint path: warm-started, the plan moves little per step
-# DexPilot as in a live session, except that two fingers pinching the thumb together may meet (see
-# "Pinches" above): eta2, the distance they are kept apart, is the thumb-finger one.
-SCRIPTED_RETARGET = DexPilotConfig(eta2=DexPilotConfig().eta1)
-# The scripted person pinches only where the plan's pads meet ("Pinches" above): a thumb tip within
-# project_dist (human scale) of a finger's whose robot tips are, in the plan, 6-30 mm apart (a power
-# grasp's fingers curled past the thumb, the pinch's folded fingers, the flat pinch's pads behind
-# its tips) was read as a pinch and pulled the tips together at weight 200, which opened the
-# fingers: RH5DG2 power grasp 0.38 rad short of its 1.32, Revo2 flat pinch 0.24 rad off. Pads
-# within 1 cm still pinch (the pad pinch's meet within 5 mm). Opt-in (ScriptedStreamOperator's
-# retarget_config): five recorded plans were tuned against the 3 cm pinch and fall below 9/12 with
-# it (screwdriver_box_hammer 0, baking_tray_prep 5, gaming_desk_setup 5, trash_disposal 6,
-# shoebox_accessory_pack 7 of 12; the other 15 recordable plans stay at 10-12).
-PLAN_PINCH_RETARGET = DexPilotConfig(eta2=DexPilotConfig().eta1, project_dist=0.01, escape_dist=0.02)
+# DexPilot as in a live session, except that the scripted person pinches only where the plan's pads
+# meet and two fingers pinching the thumb together may meet (eta2 is the thumb-finger distance): see
+# "Pinches" above.
+SCRIPTED_RETARGET = DexPilotConfig(eta2=DexPilotConfig().eta1, project_dist=0.01, escape_dist=0.02)
+# The live session's pinch distances (3 cm, escape 5 cm), against which the plans were first tuned
+LIVE_PINCH_RETARGET = DexPilotConfig(eta2=DexPilotConfig().eta1)
 
 
 class RobotShapedHand:

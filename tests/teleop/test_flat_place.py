@@ -20,9 +20,10 @@ from teleop.recorder import home, record_episode
 from teleop.scripted_operator import ScriptedOperator
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
-# beside the white piece, 8 mm clear of it (a piece let go against it lands on its edge), 1 cm short
-# along the tips' axis: letting go nudges it that way
-GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.01, -0.016],
+# beside the white piece, 8 mm clear of it (a piece let go against it lands on its edge), 2.6 cm short
+# along the tips' axis: letting go nudges it that way (1 cm before the stream hand followed the plan's
+# flat pinch: the live 3 cm pinch rule had pulled the Sharpa's thumb further in; tests/teleop/test_stream_closure.py)
+GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.026, -0.016],
          "grasp": "flat_pinch", "grasp_yaw": 90}
 # without flat_place (822a1fd) the piece on this seed ended 2.6 cm short, tilted on the white piece's edge
 SEED = 2
