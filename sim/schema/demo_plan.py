@@ -65,11 +65,17 @@ ObjectAxis = _vector((3,), "[x, y, z], a direction in the object's frame")
 AirPoint = _vector((3,), "[x, y, z] of the table top in metres, z above it")
 
 
-def _side_grasp_roll(roll: float, info: ValidationInfo) -> float:
-    """grasp_roll_deg is a side grasp's turn about the fingers: refused with any other grasp."""
-    if info.data.get("grasp") != SIDE_GRASP:
-        raise ValueError(f"no grasp_roll_deg without grasp: {SIDE_GRASP} (the hand's turn about its fingers)")
-    return roll
+def _only_with_grasp(grasp: str, what: str):
+    """A `before` check of a field that means something with one grasp only (``what`` it is): refused with
+    any other grasp (the step's `grasp` is validated before it)."""
+    def check(value, info: ValidationInfo):
+        if info.data.get("grasp") != grasp:
+            raise ValueError(f"no {info.field_name} without grasp: {grasp} ({what})")
+        return value
+    return check
+
+
+_side_grasp_roll = _only_with_grasp(SIDE_GRASP, "the hand's turn about its fingers")
 
 
 def _scope(info: ValidationInfo):
@@ -210,12 +216,10 @@ class GraspFields(CatalogModel):
             raise ValueError(words)
         return yaw
 
-    @field_validator("pinch_fingers", mode="before")
-    @classmethod
-    def _pad_pinch_fingers(cls, fingers, info: ValidationInfo):
-        if info.data.get("grasp") != "pinch":
-            raise ValueError("no pinch_fingers without grasp: pinch (the fingers the thumb's pad closes against)")
-        return fingers
+    _pad_pinch_only = field_validator("pinch_fingers", mode="before")(
+        _only_with_grasp("pinch", "the fingers the thumb's pad closes against"))
+    _flat_pinch_only = field_validator("grasp_squeeze_m", mode="before")(
+        _only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
 
     @field_validator("pinch_fingers")
     @classmethod
@@ -223,13 +227,6 @@ class GraspFields(CatalogModel):
         if len(set(fingers)) != len(fingers):
             raise ValueError(f"distinct fingers from {list(PINCH_FINGERS)}")
         return fingers
-
-    @field_validator("grasp_squeeze_m", mode="before")
-    @classmethod
-    def _flat_pinch_only(cls, depth, info: ValidationInfo):
-        if info.data.get("grasp") != "flat_pinch":
-            raise ValueError("no grasp_squeeze_m without grasp: flat_pinch (it presses the pinch's tips past each other)")
-        return depth
 
     @field_validator("grasp_point", mode="before")
     @classmethod
