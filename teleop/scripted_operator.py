@@ -22,7 +22,6 @@ from sim.embodiment.description import HandDescription, TabletopGrasp, load_embo
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
 from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation
-from teleop.pinch_grasp import pinch_grasp
 from teleop.plan_steps import PLANNERS
 from teleop.transit import hand_outline, bounding_box_points, obstacles, transit_height
 
@@ -84,10 +83,9 @@ class ScriptedOperator:
             q_home = self.ctrl_home[arm_ids]
             pos0, quat0 = kin.fk(q_home)
             start = STAGGER_STEPS if side == "left" else 0
-            pinch = pinch_grasp(hand.name)      # cached per hand
             self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
                                 "closed": closed, "group": group, "grasp_centre": grasp.centre,
-                                "pinch_close": np.clip(pinch.close, lo, hi), "hand": hand.name,
+                                "hand": hand.name,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
                                 "looks": [], "q": q_home.copy(), "q_home": q_home.copy(),
                                 "timeline": SideTimeline(pos0, quat0, open_, start),

@@ -298,10 +298,7 @@ class PickStep(PlanStep, GraspFields):
             raise ValueError(f"no {info.field_name} without via (the stops it goes through)")
         return value
 
-    @field_validator("grasp_roll_deg", mode="before")
-    @classmethod
-    def _side_only(cls, roll: float, info: ValidationInfo) -> float:
-        return _side_grasp_roll(roll, info)
+    _side_only = field_validator("grasp_roll_deg", mode="before")(_side_grasp_roll)
 
     @field_validator("place", mode="before")
     @classmethod
@@ -589,10 +586,7 @@ class HandoverStep(PlanStep, GraspFields):
             raise ValueError(f"pick_from: {PLACE_FROM_FRONT} only with grasp: {SIDE_GRASP} (the hand comes in level)")
         return way
 
-    @field_validator("grasp_roll_deg", mode="before")
-    @classmethod
-    def _side_only(cls, roll: float, info: ValidationInfo) -> float:
-        return _side_grasp_roll(roll, info)
+    _side_only = field_validator("grasp_roll_deg", mode="before")(_side_grasp_roll)
 
 
 # a step's kind is the one of these fields it has

@@ -237,10 +237,8 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         if "grasp_point" in item:
             width = part_width(op.scene.model, data, op.scene.object_body_ids[name], op.object_pos(data, name) + at,
                                axis) + PINCH_SPREAD_MARGIN_M
-        close = side["pinch_close"]
-        if fingers:     # the step's own fingers: their pads towards the thumb's, within the actuator ranges
-            close = np.clip(pinch_grasp(side["hand"], fingers).close,
-                            *op.scene.model.actuator_ctrlrange[side["hand_ids"]].T)
+        # the pads towards the thumb's (the step's own fingers, else the hand's), within the actuator ranges
+        close = np.clip(pinch_grasp(side["hand"], fingers).close, *op.scene.model.actuator_ctrlrange[side["hand_ids"]].T)
         ready, centre = pinch_preshape(side["hand"], open_, close, width, fingers)
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre) - at
         closing = [(DURATIONS["close"] + DURATIONS["close_late"], close, None)]
