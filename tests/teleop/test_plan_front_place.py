@@ -14,7 +14,7 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP
-from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_preshape
+from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape
 from teleop.plan_steps.front_place import OUTSIDE_M, RELEASE_GAP_M, opening
 from teleop.plan_steps.part_pinch import part_width
 from teleop.plan_steps.pick_place import PINCH_SPREAD_MARGIN_M
@@ -135,12 +135,13 @@ def test_a_pinch_at_a_grasp_point_closes_on_the_part_there(tmp_path):
     assert part_width(scene.model, data, bowl, rim + 0.1 * UP, radial) == 0.0, "nothing above the rim"
     side = op.sides["right"]
     frames = side["timeline"].frames
-    closes = next(k for k in range(len(frames)) if np.allclose(frames[k].hand, side["pinch_close"]))
+    pinch_close = np.clip(pinch_grasp(side["hand"]).close, *scene.model.actuator_ctrlrange[side["hand_ids"]].T)
+    closes = next(k for k in range(len(frames)) if np.allclose(frames[k].hand, pinch_close))
     grasp = frames[closes - 1]                  # come down, pre-shaped: where the hand closes
     R = np.zeros(9)
     mujoco.mju_quat2Mat(R, grasp.quat)
     axis = R.reshape(3, 3) @ pinch_axis_in_site_frame(side["hand"])
     width = part_width(scene.model, data, bowl, rim, axis) + PINCH_SPREAD_MARGIN_M
-    ready, centre = pinch_preshape(side["hand"], side["open"], side["pinch_close"], width)
+    ready, centre = pinch_preshape(side["hand"], side["open"], pinch_close, width)
     assert np.allclose(grasp.hand, ready), "pre-shaped for the wall, not for the whole bowl"
     assert np.allclose(grasp.pos + R.reshape(3, 3) @ centre, rim, atol=1e-9)
