@@ -76,6 +76,9 @@ def _only_with_grasp(grasp: str, what: str):
 
 
 _side_grasp_roll = _only_with_grasp(SIDE_GRASP, "the hand's turn about its fingers")
+# a side grasp's turn about the fingers (grasp_roll_deg, take_roll_deg)
+RollDeg = Annotated[Number, Field(ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
+                                  description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")]
 
 
 def _scope(info: ValidationInfo):
@@ -264,8 +267,7 @@ class PickStep(PlanStep, GraspFields):
     place_from: PlaceFrom = "above"         # before `place`, which it constrains
     place: Name
     place_offset: PlaceOffset = None
-    grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
-                                   description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
+    grasp_roll_deg: RollDeg = None
     place_axis: ObjectAxis = None           # turned on the way to point straight down (teleop/plan_steps/axis_place.py)
     place_tilt_deg: Number = Field(None, ge=0.0, le=60.0, description="degrees in [0, 60]")  # place_axis turned that far short of down
     hold: Bool = False                      # kept in the hand over `place` for its next step (plan_steps/via.py)
@@ -568,10 +570,8 @@ class HandoverStep(PlanStep, GraspFields):
     at: AirPoint
     pick_from: PlaceFrom = "above"
     take_point: ObjectPoint = None
-    take_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
-                                  description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
-    grasp_roll_deg: Number = Field(None, ge=SIDE_ROLL_RANGE_DEG[0], le=SIDE_ROLL_RANGE_DEG[1],
-                                   description=f"degrees in [{SIDE_ROLL_RANGE_DEG[0]:g}, {SIDE_ROLL_RANGE_DEG[1]:g}]")
+    take_roll_deg: RollDeg = None
+    grasp_roll_deg: RollDeg = None
 
     @field_validator("to_hand", mode="before")
     @classmethod
