@@ -196,6 +196,9 @@ class GraspFields(CatalogModel):
     grasp_squeeze_m: Number = Field(None, ge=SQUEEZE_RANGE_M[0], le=SQUEEZE_RANGE_M[1],
                                     description=f"metres in [{SQUEEZE_RANGE_M[0]:g}, {SQUEEZE_RANGE_M[1]:g}]")
 
+    # a pad pinch's pre-shape spread until its fingertips, not only its pads, clear the part (curled fingertips
+    # that reach past the pads land on a thin rim otherwise; teleop/pinch_tips.py)
+    pinch_clear_tips: Bool = False
     @field_validator("grasp", mode="before")
     @classmethod
     def _a_grasp(cls, grasp: str) -> str:
@@ -224,6 +227,8 @@ class GraspFields(CatalogModel):
     _flat_pinch_only = field_validator("grasp_squeeze_m", mode="before")(
         _only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
 
+    _pad_pinch_clear_tips = field_validator("pinch_clear_tips", mode="before")(
+        _only_with_grasp("pinch", "a pad pinch's pre-shape spread until its fingertips clear the part"))
     @field_validator("pinch_fingers")
     @classmethod
     def _distinct_fingers(cls, fingers: list[str]) -> list[str]:
@@ -247,7 +252,8 @@ class PickStep(PlanStep, GraspFields):
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
     object's frame; pinch_fingers [index, middle, ...] are the fingers a pad pinch closes the thumb against
-    (default the hand's own set, teleop/pinch_grasp.py); grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
+    (default the hand's own set, teleop/pinch_grasp.py), pinch_clear_tips: true spreads it until the fingertips,
+    not only the pads, clear the part (a thin rim: teleop/pinch_tips.py); grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
     its centre or of grasp_point (a spatula's handle clear of its blade), grasp_squeeze_m (metres) aiming its
     closed tips that far past each other for a firmer hold (a heavy tool); grasp: side is the palm grasp
     from the side, thumb up, around an upright part (a drill's grip under its motor, a bottle), turned

@@ -25,6 +25,7 @@ from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_
                                     axis_rotation, pitched_palm_down, quat, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape
 from teleop.pinch_squeeze import squeezed
+from teleop.pinch_tips import tips_clear_preshape
 from teleop.plan_steps.flat_place import flat_place
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.part_pinch import part_width
@@ -240,6 +241,8 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         # the pads towards the thumb's (the step's own fingers, else the hand's), within the actuator ranges
         close = np.clip(pinch_grasp(side["hand"], fingers).close, *op.scene.model.actuator_ctrlrange[side["hand_ids"]].T)
         ready, centre = pinch_preshape(side["hand"], open_, close, width, fingers)
+        if item.get("pinch_clear_tips"):    # spread until the curled fingertips clear the part too
+            ready, centre = tips_clear_preshape(side["hand"], open_, close, width, fingers)
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre) - at
         closing = [(DURATIONS["close"] + DURATIONS["close_late"], close, None)]
     else:

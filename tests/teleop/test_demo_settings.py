@@ -27,7 +27,7 @@ SETTINGS = [
     ("medicine_shoebox_pack", "panda_orca", 4),
     ("microwave_bowl_loading", "ur5_schunk", 1),
     ("screwdriver_box_hammer", "ur5_rh56dfx", 0),
-    ("shoebox_accessory_pack", "xarm7_leap", 2),     # seed 0 drops the collar on the stream path (7/12)
+    ("shoebox_accessory_pack", "xarm7_leap", 0),
     ("soup_serving", "ur5_shadow", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("stationery_category_sorting", "rm65_revo2", 9),
