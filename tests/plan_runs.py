@@ -1,6 +1,8 @@
 """Run a planned demonstration part of the way, for tests of plan steps."""
 
 from sim import physics
+from teleop.recorder import home
+from teleop.scripted_operator import ScriptedOperator
 
 
 def rise_through_lift(scene, data, op, name: str, hand: str = "right") -> float:
@@ -12,3 +14,12 @@ def rise_through_lift(scene, data, op, name: str, hand: str = "right") -> float:
     for step in range(lifted):
         physics.step_control(scene.model, data, op.act(step, data))
     return float(data.xpos[body][2]) - z0
+
+
+def home_and_plan(scene, operator=None):
+    """``(data, operator)``: the scene at its home pose and a scripted operator (a new ScriptedOperator
+    unless given) that has planned its demonstration there."""
+    data = home(scene)
+    operator = operator or ScriptedOperator()
+    operator.reset(scene, data)
+    return data, operator

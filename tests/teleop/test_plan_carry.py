@@ -13,8 +13,9 @@ from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.scene.reach import PALM_DOWN
 from sim.tasks import load_task
-from teleop.recorder import EpisodeRecording, home
-from teleop.scripted_operator import STAGGER_STEPS, ScriptedOperator
+from teleop.recorder import EpisodeRecording
+from teleop.scripted_operator import STAGGER_STEPS
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "cleaner_box_loading", "xarm7_leap"
 STEP = {"hand": "both", "carry": "cleaner", "place": "wooden_box", "place_offset": [-0.07, -0.03, -0.12],
@@ -52,9 +53,7 @@ def _operator(plan):
     scene = demonstration_scene(TASK, EMBODIMENT, 0)
     # a copy: the task is load_task's cached one, whose own plan later tests record
     scene.task = dataclasses.replace(scene.task, demo_plan=_check(plan))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

@@ -10,8 +10,8 @@ from sim.errors import SpecError
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
-from teleop.recorder import EpisodeRecording, home
-from teleop.scripted_operator import ScriptedOperator
+from teleop.recorder import EpisodeRecording
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "medicine_shoebox_pack", "panda_orca"
 LOW_HOOK = {"hook_depth": 0.05, "pitch_deg": 60, "hook_closure": 0.3}   # below the tall box's tipping height
@@ -37,9 +37,7 @@ def test_drag_refuses_bad_optional_fields(tmp_path, field, value, expected):
 def _timeline(tmp_path, **fields):
     task = _task(tmp_path, **fields)
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

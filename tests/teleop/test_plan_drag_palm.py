@@ -15,9 +15,8 @@ from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP
 from teleop.pinch_grasp import THUMB_TIP, fingertip_rows, fingertips_in_site_frame
 from teleop.plan_steps.drag import PUSH_TIP_HEIGHT_M
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import hand_outline
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "fruit_bowl_loading", "ur5_rh56dfx"
 PUSH = {"hand": "right", "drag": "bowl", "to_zone": "center", "contact": "palm"}
@@ -51,9 +50,7 @@ def _rotation(quat: np.ndarray) -> np.ndarray:
 def test_the_flat_hand_pushes_from_behind_on_its_edge_all_the_way_to_the_zone(tmp_path):
     task = _task(tmp_path)
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     side = op.sides["right"]
     bowl = data.xpos[scene.object_body_ids["bowl"]].copy()
     goal = np.array([*zone_centre(task.zones["center"]), bowl[2]])

@@ -18,7 +18,7 @@ from teleop.demos import DEFAULT_OPERATOR, OPERATORS
 from teleop.plan_steps.palm_push import palm_frame, palm_turns
 from teleop.plan_steps.turn import Hinge
 from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT, LID = "toilet_lid_cleaner_pour", "xarm7_leap", "toilet/lid"
 OPEN, CLOSE = 0, 2          # the plan's steps that turn the lid
@@ -77,9 +77,7 @@ def test_palm_turns_from_its_angle_on_either_way():
 def _planned(raw, tmp_path):
     task = parse_task(raw, tmp_path / "toilet.yaml")
     scene = demonstration_scene(task, EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

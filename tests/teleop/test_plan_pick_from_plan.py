@@ -11,8 +11,7 @@ from sim.demo_plan import PlanScope, parse_plan
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "faucet_cup_water_fill", "rm65_revo2"
 ZONES = {"under_faucet": {"xy_min": [0.3, 0.05], "xy_max": [0.34, 0.09]},      # under the spout's end
@@ -32,9 +31,7 @@ def _mug_pick(from_plan: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     plan = parse_plan("test", {"demo_plan": steps}, PlanScope(objects, zones, spec.points))
     spec = dataclasses.replace(spec, objects=objects, zones=zones, demo_plan=plan)
     scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, demonstration_seed(TASK, 0)))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     side = op.sides["right"]
     # the pick's look at the mug as the hand sets off (the last at the mug; the drags' come before it)
     sets_off, _, planned, frames = [r for r in side["reaims"] if r[1] == "mug"][-1]

@@ -17,8 +17,7 @@ from sim.errors import SpecError
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "stationery_category_sorting", "rm65_revo2"
 MARKER = {"hand": "right", "pick": "marker", "place": "pen_cup", "place_offset": [0.0, 0.0, -0.05],
@@ -62,9 +61,7 @@ def _rot(q) -> np.ndarray:
 def test_the_planned_release_holds_the_axis_down_over_the_cup(axis):
     step = {**MARKER, "place_axis": axis} if axis else {k: v for k, v in MARKER.items() if k != "place_axis"}
     scene = _scene([step])
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     frames = op.sides["right"]["timeline"].frames
     body = scene.object_body_ids["marker"]
     in_hand = _rot(frames[2].quat).T @ data.xmat[body].reshape(3, 3)     # as it is grasped
@@ -78,9 +75,7 @@ def test_the_planned_release_holds_the_axis_down_over_the_cup(axis):
 
 def test_a_lying_marker_ends_upright_in_the_cup():
     scene = _scene([MARKER], seed=0)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     for step in range(op.length):
         physics.step_control(scene.model, data, op.act(step, data))
     marker, cup = (scene.object_body_ids[n] for n in ("marker", "pen_cup"))

@@ -14,8 +14,7 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
 from teleop.plan_steps.axis_place import turn_down
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "stationery_category_sorting", "rm65_revo2"
 PEN = {"hand": "left", "pick": "gray_pen", "place": "pen_cup", "place_offset": [0.0, 0.0, -0.05],
@@ -58,9 +57,7 @@ def test_turn_down_stops_short_of_straight_down(short):
 def test_the_planned_release_leaves_the_axis_tilted_over_the_cup(tilt):
     spec = _task([{**PEN, "place_tilt_deg": tilt}])
     scene = build_scene(spec, EMBODIMENT, demonstration_sample(spec, demonstration_seed(TASK, 0)))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     frames = op.sides["left"]["timeline"].frames
     in_hand = _rot(frames[2].quat).T @ data.xmat[scene.object_body_ids["gray_pen"]].reshape(3, 3)   # as grasped
     opened = next(i for i, f in enumerate(frames) if i > 3 and np.allclose(f.hand, op.sides["left"]["open"]))

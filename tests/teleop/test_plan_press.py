@@ -15,8 +15,9 @@ from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP, pitched_palm_down
 from teleop.pinch_grasp import hand_kinematics
 from teleop.plan_steps.press import CLEARANCE_M, HOVER_M, _lowest, key_geometry, pointing
-from teleop.recorder import home, record_episode
+from teleop.recorder import record_episode
 from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "bimanual_piano_melody", "xarm7_ability"
 KEY_HALF_WIDTH_M = 0.011        # the piano's key: box half size across the row
@@ -63,9 +64,7 @@ def test_keyframes_put_the_index_tip_on_each_key_in_turn():
     """The right hand's wrist keyframes bring the index tip (from the wrist pose) over each key of
     its melody, HOVER_M above its top between presses and past its full travel when pressing."""
     scene = demonstration_scene(TASK, EMBODIMENT, 0)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     _, index, _ = pointing("ability")
     frames = op.sides["right"]["timeline"].frames
     tips = np.array([f.pos + quat_to_mat(f.quat) @ index for f in frames])
@@ -83,9 +82,7 @@ def test_repeated_key_goes_down_twice_and_nothing_else_moves():
     """Direct joint path, first 230 steps: the right index presses C4, lets it come back up, presses
     it again; no other key of the piano passes the evaluator's press threshold."""
     scene = demonstration_scene(TASK, EMBODIMENT, 0)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     m = scene.model
     keys = [m.joint(j).name for j in range(m.njnt) if m.joint(j).name.startswith("piano/")]
     adr = np.array([m.jnt_qposadr[m.joint(k).id] for k in keys])
@@ -116,9 +113,7 @@ def test_presses_follow_a_key_whose_object_was_moved(tmp_path):
     raw["demo_plan"] = [{"hand": "right", "press": ["mouse/left_button"]}]
     task = parse_task(raw, tmp_path / "desk.yaml")
     scene = build_scene(task, "jaka_zu7_dexhand021", demonstration_sample(task, 0))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     frames = op.sides["right"]["timeline"].frames
     planned = [f.pos.copy() for f in frames]
     shift = np.array([-0.05, 0.03, 0.0])

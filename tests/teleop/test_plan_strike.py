@@ -11,8 +11,8 @@ from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
 from teleop.plan_steps.strike import STRIKE_FOLLOW_M, STRIKE_RISE_M, swing_steps
-from teleop.recorder import EpisodeRecording, home
-from teleop.scripted_operator import ScriptedOperator
+from teleop.recorder import EpisodeRecording
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "screwdriver_box_hammer", "ur5_rh56dfx"
 # a screwdriver pinched by the RH56DFX strikes with its handle's butt (the task's hammer, lifted only by a flat
@@ -61,9 +61,7 @@ def _scene(before=()):
                       PlanScope(spec.objects, spec.zones, spec.points))
     spec = dataclasses.replace(spec, metrics=metrics, demo_plan=plan)
     scene = demonstration_scene(spec, EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

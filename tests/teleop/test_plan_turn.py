@@ -16,7 +16,7 @@ from teleop.demos import DEFAULT_OPERATOR, OPERATORS
 from teleop.pinch_grasp import fingertips_in_site_frame
 from teleop.plan_steps.turn import FACE_GAP_M, Hinge
 from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT, LID = "trash_disposal", "ur5_rh56dfx", "trash_can/lid"
 OPEN_RAD = 1.6
@@ -70,9 +70,7 @@ def _pads(op, frame) -> np.ndarray:
 
 def _planned(scene):
     """The scene at home and a scripted operator that has planned its task's steps there."""
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return data, op
 
 

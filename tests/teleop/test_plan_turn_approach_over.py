@@ -14,9 +14,8 @@ from sim.errors import SpecError
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task, parse_task
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import CLEARANCE_M, hand_outline
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "fridge_wine_interhand_pour", "ur5_rh5dg2"
 OPEN = {"hand": "left", "turn": "fridge/door", "to": 1.7, "speed": 0.15}
@@ -28,9 +27,7 @@ def _left(tmp_path, **fields):
     raw["demo_plan"] = [OPEN, {**SHUT, **fields}]
     task = parse_task(raw, tmp_path / "fridge.yaml")
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, demonstration_seed(TASK, 0)))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     model, door = scene.model, scene.model.joint("fridge/door").id
     top = max(float(data.geom_xpos[g][2] + model.geom_aabb[g, 5]) for g in range(model.ngeom)
               if model.geom_bodyid[g] == model.jnt_bodyid[door])     # a vertical hinge: the same at any angle

@@ -10,8 +10,7 @@ import yaml
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task, parse_task
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "fridge_wine_interhand_pour", "ur5_rh5dg2"
 PULL = {"hand": "left", "turn": "fridge/door", "to": 1.9, "speed": 0.15}
@@ -22,9 +21,7 @@ def _left(tmp_path, steps):
     raw["demo_plan"] = steps
     task = parse_task(raw, tmp_path / "fridge.yaml")
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, demonstration_seed(TASK, 0)))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     door = scene.model.joint("fridge/door").id
     top = max(float(data.geom_xpos[g][2] + scene.model.geom_aabb[g, 5]) for g in range(scene.model.ngeom)
               if scene.model.geom_bodyid[g] == scene.model.jnt_bodyid[door])

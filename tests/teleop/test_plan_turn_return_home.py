@@ -18,6 +18,7 @@ from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task, parse_task
 from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 MICROWAVE, SCHUNK, DOOR = "microwave_bowl_loading", "ur5_schunk", "microwave/door"
 OPEN = {"hand": "left", "turn": DOOR, "to": 1.9, "speed": 0.15}
@@ -82,9 +83,7 @@ def _fridge(tmp_path, **fields):
     raw["demo_plan"] = [{**PULL, **fields}, {**PULL, "to": 0.0, "wait_s": 10.0}]
     task = parse_task(raw, tmp_path / "fridge.yaml")
     scene = build_scene(task, SHADOW, demonstration_sample(task, demonstration_seed(FRIDGE, 0)))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     for step in range(STEPS):
         physics.step_control(scene.model, data, op.act(step, data))
     return float(data.qpos[scene.model.jnt_qposadr[scene.model.joint("fridge/right_door").id]])

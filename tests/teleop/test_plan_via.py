@@ -12,10 +12,9 @@ from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 from teleop.plan_steps.via import VIA_DURATIONS, VIA_INSIDE_DEPTH_M, VIA_OVER_CLEARANCE_M
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 
 from task_files import task_file_with_plan
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "soup_serving", "ur5_shadow"
 # the task's own plan: the left hand holds the bowl up beside the pot, the right ladles twice
@@ -54,9 +53,7 @@ def test_bad_stops_are_refused(tmp_path, step, expected):
 def _operator(*steps):
     spec = dataclasses.replace(load_task(TASK), demo_plan=list(steps))
     scene = demonstration_scene(spec, EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

@@ -16,8 +16,8 @@ from evaluation.geometry import _rotation, length, rotation
 from sim import physics
 from sim.scene.builder import demonstration_scene
 from sim.scene.state import SceneObserver
-from teleop.recorder import home, new_buffer, store_step
-from teleop.scripted_operator import ScriptedOperator
+from teleop.recorder import new_buffer, store_step
+from plan_runs import home_and_plan
 
 STEPS = 120
 # citrus: every object free; microwave: a fixed-base microwave (its pose comes from the model) and a door joint
@@ -29,9 +29,7 @@ def rollout(task: str, embodiment: str):
     """STEPS scripted control steps through the recorder's snapshot, evaluator and store, keeping a
     copy of MjData after each step for the reference formulas."""
     scene = demonstration_scene(task, embodiment)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     observer = SceneObserver(scene)
     evaluator = EpisodeEvaluator(scene.task.metrics, observer.context)
     buf = new_buffer(scene, len(evaluator.stage_ids))

@@ -11,9 +11,8 @@ import yaml
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import CLEARANCE_M, hand_outline
+from plan_runs import home_and_plan
 
 BASE, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
 TOWER = {"shape": "box", "size": [0.03, 0.03, 0.15], "mass": 0.3, "rgba": [0.3, 0.3, 0.8, 1.0]}
@@ -42,9 +41,7 @@ def _operator(tmp_path, tower_xy):
         tower = demonstration_sample(task, 0).object_poses["tower"]
         sample = dataclasses.replace(sample, task=task.name, object_poses={**sample.object_poses, "tower": tower})
     scene = build_scene(task, EMBODIMENT, sample)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 
