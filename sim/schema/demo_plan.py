@@ -44,6 +44,7 @@ POUR_DEFAULT_GRASP = SIDE_GRASP
 TURN_SPEED_RANGE_M_S = (0.0, 0.3)    # turn's speed: the contact along the arc, above 0 and at most a brisk swing
 VIA_KINDS = ("inside", "over")      # a pick's via stops: into a container's cavity, below its rim; above an object
 VIA_TIMES_RANGE = (1, 10)
+PRESS_RANGE_M = (0.0, 0.03)      # place_press_m: a flat pinch's object set down up to 3 cm below its release height
 SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed past each other, up to 5 cm
 
 
@@ -264,7 +265,10 @@ class PickStep(PlanStep, GraspFields):
     via [{inside: <container>} | {over: <object>}, ...] takes the carried object's via_point through those
     stops, via_times rounds, on its way (a ladle into a pot, then over a bowl);
     hold: true keeps it in the hand over `place` (dz: its bottom above the table) for the hand's next pick
-    of it (teleop/plan_steps/via.py)."""
+    of it (teleop/plan_steps/via.py). With grasp: flat_pinch, release_pinch_only: true lets go opening only the
+    thumb and the pinching fingers (the folded ones stay), place_press_m (metres) sets it down that far below
+    its release height, and release_relax (a fraction) opens the thumb and the pinching fingers from where they
+    hold that far towards the open hand (teleop/plan_steps/flat_place.py)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -282,6 +286,12 @@ class PickStep(PlanStep, GraspFields):
     via_times: Int = Field(None, ge=VIA_TIMES_RANGE[0], le=VIA_TIMES_RANGE[1],
                            description=f"a whole number of rounds in [{VIA_TIMES_RANGE[0]}, {VIA_TIMES_RANGE[1]}]")
     via_point: ObjectPoint = None           # the carried object's point that goes through the stops (a ladle's bowl)
+    # flat pinch, letting go: only the thumb and the pinching fingers open, the folded ones stay (plan_steps/flat_place.py)
+    release_pinch_only: Bool = False
+    place_press_m: Number = Field(None, ge=PRESS_RANGE_M[0], le=PRESS_RANGE_M[1],   # flat pinch: set down this far below
+                                  description=f"metres in [{PRESS_RANGE_M[0]:g}, {PRESS_RANGE_M[1]:g}]")  # its release height
+    # flat pinch: the pinching digits open from where they hold, this fraction of the way to open (not to the pre-shape)
+    release_relax: Number = Field(None, gt=0.0, le=1.0, description="a fraction in (0, 1]")
 
     @field_validator("hold", mode="before")
     @classmethod
@@ -307,6 +317,8 @@ class PickStep(PlanStep, GraspFields):
         return value
 
     _side_only = field_validator("grasp_roll_deg", mode="before")(_side_grasp_roll)
+    _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", mode="before")(
+        _only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
 
     @field_validator("place", mode="before")
     @classmethod

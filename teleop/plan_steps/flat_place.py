@@ -17,6 +17,12 @@ the fingers apart only as far as they came in, slides the thumb off its side and
   across the table), moves EASE_M away from the thumb's side and then lifts: the thumb, left against
   the object's side, dragged it 4-6 cm as the hand rose (jigsaw seeds 2-3, stream path; 1-2 cm with
   the ease); the hand opens fully on its way to what comes next.
+- opt-in (a pick's fields): `release_pinch_only: true` opens only the thumb and the pinching fingers, the
+  folded ones staying as they held (eased to the pre-shape they came down on a jigsaw piece's edge and
+  lifted it with the hand); `place_press_m` lowers the object that far below its release height instead of
+  PRESS_M (a piece held tilted, one edge on a fingertip, lies flatter before the hand opens);
+  `release_relax: f` opens the thumb and the pinching fingers from where they hold, f of the way to the
+  open hand (read as the hand is about to open), instead of to the pre-shape (relaxed_release).
 
 jigsaw_puzzle_assembly__iiwa7_sharpa, stream path, seeds 0-11, green and red pieces set 8 mm clear
 of the white one: 10 and 8 of 12 within the task's tolerance once let go (tests/teleop/test_flat_place.py).
@@ -24,13 +30,16 @@ of the white one: 10 and 8 of 12 within the task's tolerance once let go (tests/
 
 from __future__ import annotations
 
+import functools
+
 import mujoco
 import numpy as np
 
 from sim.demo_plan import TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
-from teleop.flat_pinch import tip_axis
+from teleop.flat_pinch import tip_axis, tip_pinch
 from teleop.operator_motion import UP, SideTimeline, quat, yawed
+from teleop.pinch_grasp import hand_kinematics, moving_and_folded, pinch_rows
 from teleop.plan_steps.operator import PlanningOperator
 
 LIFTED_M = 0.02         # an object this far above where it lay has been picked up
@@ -56,6 +65,32 @@ def square_turn(obj_rot: np.ndarray, target_rot: np.ndarray, half_extents) -> fl
     return float((turn + period / 2) % period - period / 2)
 
 
+@functools.lru_cache(maxsize=None)
+def pinching_actuators(hand_name: str) -> np.ndarray:
+    """(hand order) True for the actuators that move the flat pinch's thumb or pinching fingers (tip_pinch's
+    fingers); False for the fingers it keeps folded away."""
+    thumb, tips = pinch_rows(hand_name, tip_pinch(hand_name).fingers)
+    moving, _ = moving_and_folded(hand_kinematics(hand_name), [thumb, *tips])
+    moving.flags.writeable = False      # cached: shared by every caller
+    return moving
+
+
+def relaxed_release(side: dict, frames: slice, folded: np.ndarray, fraction: float):
+    """A look (on_frame_end) as the hand lets go: the thumb and the pinching fingers open from the joint
+    positions they hold at, ``fraction`` of the way to the open hand, for the keyframes ``frames`` (open,
+    ease off, retreat); the other fingers stay ``folded``. A person relaxes a grip rather than opening to a
+    shape: the held tips sit centimetres from where the pre-shape puts them, and opening to it swept them
+    across the piece."""
+    pinching = pinching_actuators(side["hand"])
+
+    def relax(now: mujoco.MjData) -> None:
+        held = np.asarray(now.actuator_length[side["hand_ids"]], float)
+        hand = np.where(pinching, held + fraction * (side["open"] - held), folded)
+        for frame in side["timeline"].frames[frames]:
+            frame.hand = hand
+    return relax
+
+
 def _rot_z(angle: float) -> np.ndarray:
     c, s = np.cos(angle), np.sin(angle)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
@@ -77,6 +112,10 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     tl: SideTimeline = side["timeline"]
     opened = tl.frames[lower_frame + 1]
     opened.hand = np.asarray(release_hand, float)
+    if item.get("release_pinch_only"):
+        # the folded fingers stay as they held: eased to the pre-shape they came down onto a jigsaw piece's edge
+        # and lifted it with the hand (green and red pieces within tolerance on 3 -> 9 of 12, stream path)
+        opened.hand = np.where(pinching_actuators(side["hand"]), opened.hand, tl.frames[lower_frame].hand)
     # slide the thumb off the object's side before lifting the hand away
     retreat = tl.frames.pop()
     axis = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand)
@@ -91,6 +130,9 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     obj = op.scene.task.objects[name]
     body = op.scene.object_body_ids[name]
     start_z = float(op.object_pos(data, name)[2])
+    # `place_press_m`: lowered that far below the release height instead (a piece held tilted, one edge on a
+    # fingertip, pressed flatter before letting go; 0.02 with release_pinch_only: green and red 9 -> 10 of 12)
+    press = PRESS_M if item.get("place_press_m") is None else -float(item["place_press_m"])
     held = {"offset": None}         # the object's centre from the wrist as the carry turned it
 
     def turn_to_square(now: mujoco.MjData) -> float:
@@ -126,9 +168,13 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         # the plan's height
         turned = _rot_z(turn) @ actual
         for frame in tl.frames[lower_frame:end]:
-            centre = frame.pos + np.array([actual[0], actual[1], held["offset"][2] + PRESS_M])
+            centre = frame.pos + np.array([actual[0], actual[1], held["offset"][2] + press])
             frame.pos = centre - turned
             frame.quat = quat(yawed(_mat(frame.quat), turn))
 
     op.on_frame_end(side, carry_frame - 1, set_off)
     op.on_frame_end(side, lower_frame - 1, lowering)
+    if item.get("release_relax") is not None:     # jigsaw green and red: 10 -> 12 of 12 within 7 mm (stream path)
+        folded = tl.frames[lower_frame].hand
+        op.on_frame_end(side, lower_frame, relaxed_release(side, slice(lower_frame + 1, end), folded,
+                                                           float(item["release_relax"])))

@@ -1,0 +1,106 @@
+"""A flat pinch's opt-in release fields (teleop/plan_steps/flat_place.py): `release_pinch_only` opens only
+the thumb and the pinching fingers, `place_press_m` sets the object down that far below its release height,
+`release_relax` opens them from where they hold rather than to the pre-shape."""
+
+import dataclasses
+
+import mujoco
+import numpy as np
+import pytest
+
+from sim.demo_plan import PlanScope, parse_plan
+from sim.errors import SpecError
+from sim.scene.builder import demonstration_scene
+from sim.tasks import load_task
+from teleop.plan_steps.flat_place import PRESS_M, pinching_actuators
+from teleop.plan_steps.pick_place import flat_pinch
+from teleop.recorder import home
+from teleop.scripted_operator import ScriptedOperator
+
+TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
+GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.02, -0.016],
+         "grasp": "flat_pinch", "grasp_yaw": 90}
+
+
+def _parse(step: dict):
+    spec = load_task(TASK)
+    return spec, parse_plan("jigsaw.yaml", {"demo_plan": [step]}, PlanScope(spec.objects, spec.zones, spec.points))
+
+
+def _op(step: dict):
+    spec, plan = _parse(step)
+    scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), EMBODIMENT, 0)
+    data = home(scene)
+    op = ScriptedOperator()
+    op.reset(scene, data)
+    return op, data
+
+
+@pytest.mark.parametrize(("extra", "expected"), [
+    ({"grasp": "pinch", "release_pinch_only": True}, "no release_pinch_only without grasp: flat_pinch"),
+    ({"grasp": "power", "place_press_m": 0.02}, "no place_press_m without grasp: flat_pinch"),
+    ({"place_press_m": 0.05}, r"metres in \[0, 0.03\]"),
+    ({"grasp": "power", "release_relax": 0.5}, "no release_relax without grasp: flat_pinch"),
+    ({"release_relax": 0}, r"a fraction in \(0, 1\]"),
+])
+def test_the_release_fields_are_a_flat_pinchs_only(extra, expected):
+    step = {**GREEN, **extra}
+    if step["grasp"] != "flat_pinch":
+        del step["grasp_yaw"]
+    with pytest.raises(SpecError, match=rf"jigsaw.yaml: field 'demo_plan\[0\]\.{next(iter(extra.keys() - {'grasp'}))}'.*{expected}"):
+        _parse(step)
+
+
+def test_release_pinch_only_keeps_the_folded_fingers_as_they_held():
+    op, data = _op({**GREEN, "release_pinch_only": True})
+    frames = op.sides["right"]["timeline"].frames
+    # from the end: back home, retreat, ease off, open, lower (holding)
+    retreat, ease, opened, lower = frames[-2], frames[-3], frames[-4], frames[-5]
+    ready = flat_pinch(op, data, op.scene.task.demo_plan[0], "green_piece")[1]     # the pre-shape it came down with
+    pinching = pinching_actuators("sharpa")
+    assert pinching.any() and not pinching.all()
+    assert np.allclose(opened.hand[pinching], ready[pinching])
+    assert np.allclose(opened.hand[~pinching], lower.hand[~pinching])
+    assert not np.allclose(ready[~pinching], lower.hand[~pinching])     # the default release moves them
+    assert np.allclose(ease.hand, opened.hand) and np.allclose(retreat.hand, opened.hand)
+
+
+def _lowered(step: dict) -> list:
+    """The keyframes of a one-pick plan after the operator's two looks (setting off, starting down), the
+    piece seen 5 cm under the wrist."""
+    op, data = _op(step)
+    side = op.sides["right"]
+    model = op.scene.model
+    adr = model.jnt_qposadr[model.body_jntadr[op.scene.object_body_ids["green_piece"]]]
+    data.qpos[adr:adr + 3] = data.site_xpos[side["wrist_site_id"]] - [0.0, 0.0, 0.05]
+    mujoco.mj_forward(model, data)
+    for _, adjust in side["looks"]:
+        if adjust.__name__ in ("set_off", "lowering"):
+            adjust(data)
+    return side["timeline"].frames
+
+
+def test_place_press_m_sets_the_object_down_that_far_below_its_release_height():
+    default, pressed = _lowered(GREEN), _lowered({**GREEN, "place_press_m": 0.02})
+    for before, after in zip(default[-5:-1], pressed[-5:-1]):       # lower, open, ease off, retreat
+        assert np.allclose(after.pos[:2], before.pos[:2])
+        assert after.pos[2] - before.pos[2] == pytest.approx(-0.02 - PRESS_M, abs=1e-9)
+
+
+def test_release_relax_opens_the_pinching_digits_from_where_they_hold():
+    """As the hand is about to open, the operator reads the hand's joints: the thumb and the pinching fingers
+    go that fraction of the way from there to the open hand, for the open, ease-off and retreat keyframes."""
+    op, data = _op({**GREEN, "release_relax": 0.6})
+    side = op.sides["right"]
+    frames = side["timeline"].frames
+    lower = frames[-5]
+    relax = [adjust for _, adjust in side["looks"] if adjust.__name__ == "relax"]
+    assert len(relax) == 1
+    data.qpos[:] += 0.1      # a hand that holds somewhere else than the plan's targets
+    mujoco.mj_forward(op.scene.model, data)
+    held = data.actuator_length[side["hand_ids"]].copy()
+    relax[0](data)
+    pinching = pinching_actuators("sharpa")
+    for frame in frames[-4:-1]:     # open, ease off, retreat
+        assert np.allclose(frame.hand[pinching], (held + 0.6 * (side["open"] - held))[pinching])
+        assert np.allclose(frame.hand[~pinching], lower.hand[~pinching])
