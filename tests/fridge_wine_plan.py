@@ -1,5 +1,6 @@
-"""The plan tried on fridge_wine_interhand_pour at stop 31 (4 of 12 seeds, not in the task file), planned on
-seed 0's scene, for the tests of the looks it needs."""
+"""The plan tried on fridge_wine_interhand_pour at stop 31 (4 of 12 seeds; the task file's plan since stop 32
+opens the door further and hands the bottle back round its body), planned on seed 0's scene, for the tests of
+the looks it needs."""
 
 import mujoco
 import numpy as np
