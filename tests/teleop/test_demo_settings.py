@@ -33,6 +33,7 @@ SETTINGS = [
     ("soup_serving", "ur5_shadow", 0),
     ("sports_ball_cup_sort", "panda_allegro", 0),
     ("stationery_category_sorting", "rm65_revo2", 9),
+    ("tool_box_loading", "panda_orca", 0),
     ("trash_disposal", "ur5_rh56dfx", 0),
     ("wine_glass_plate_balance", "xarm7_ability", 0),
 ]
