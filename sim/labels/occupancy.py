@@ -8,7 +8,9 @@ overlap (contacts, compound parts) the higher semantic id wins, then the higher 
 objects win over the robot and the table (robot parts among themselves follow `LabelIds.from_scene`'s
 class order: base, left arm, left hand, right arm, right hand). Only labelled geoms fill voxels
 (objects, robot, table); planes are infinite half-spaces and are left out, like everything of the
-world body (floor).
+world body (floor). An object none of whose voxel centres lies inside it (thinner than a voxel: a
+spoon's 1 cm round handle can fall between the centres of a 1 cm grid) occupies the voxel holding each
+of its geoms' centres instead, so no object within the bounds is missing from the grid.
 
 Speed: the geoms welded to the world (the table, the robot torso, fixed object bases) are filled
 once from the model; their semantic and instance grids are copied per frame. Per frame, each moving
@@ -59,12 +61,22 @@ class OccupancyLabeler:
         self._static = np.zeros(int(np.prod(self.shape)), np.uint32)      # flat keys
         for g in labelled[welded]:            # one geom at a time: a block's arrays at most in memory
             np.maximum.at(self._static, *self._inside(np.array([g]), rest))
+        objects = labelled[ids.geom_instance[labelled] > 0]        # geoms of objects (those with instance ids)
+        self._in_static = np.zeros(int(ids.geom_instance.max(initial=0)) + 1, bool)   # [instance] has a static voxel
+        self._in_static[self._static & 0xFFFF] = True
+        voxels, keys = self._thin_objects(objects[np.isin(objects, self.dynamic, invert=True)],
+                                          *self._inside(np.zeros(0, int), rest), rest)
+        np.maximum.at(self._static, voxels, keys)
+        self._in_static[keys & 0xFFFF] = True
+        self._in_static[0] = False      # instance 0: no object
+        self._moving_objects = objects[np.isin(objects, self.dynamic)]
         self._semantic, self._instance = _split(self._static)
         self._merged = np.zeros_like(self._static)    # scratch, all zero between captures
 
     def capture(self, data: mujoco.MjData) -> Occupancy:
         semantic, instance = self._semantic.copy(), self._instance.copy()
         voxels, keys = self._inside(self.dynamic, data)
+        voxels, keys = self._thin_objects(self._moving_objects, voxels, keys, data)
         if voxels.size:
             merged = self._merged
             try:                # the maximum over the geoms covering each voxel, then over the static key
@@ -131,6 +143,23 @@ class OccupancyLabeler:
                 size = np.repeat(self.shapes.size[geoms[members]].T, count[members], axis=1)
                 inside[run] = primitive_contains(int(t), size, x[run], y[run], z[run])
         return voxels[inside], np.repeat(self.key[geoms], count)[inside]
+
+
+    def _thin_objects(self, geoms: np.ndarray, voxels: np.ndarray, keys: np.ndarray,
+                      data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
+        """`voxels` and `keys` (of `_inside`) with, for each object among `geoms` that holds no voxel in
+        them nor in the static grid, the voxel holding each of its geoms' centres (within the bounds)."""
+        if not len(geoms):
+            return voxels, keys
+        present = self._in_static.copy()
+        present[(keys & 0xFFFF)] = True
+        missing = geoms[~present[self.key[geoms] & 0xFFFF]]
+        if not len(missing):
+            return voxels, keys
+        cell = np.floor((data.geom_xpos[missing] - self.bounds[0]) / self.voxel_size).astype(np.int64)
+        within = np.all((cell >= 0) & (cell < np.array(self.shape)), axis=1)
+        extra = np.ravel_multi_index(cell[within].T, self.shape).astype(np.int64)
+        return np.concatenate([voxels, extra]), np.concatenate([keys, self.key[missing[within]]])
 
 
 def _split(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -209,3 +209,15 @@ def test_sphere_and_ellipsoid_surfaces_are_the_icosphere_scaled_every_time():
             want.apply_scale(scale)
             got = shapes.surface(g)
             assert np.array_equal(got.vertices, want.vertices) and np.array_equal(got.faces, want.faces)
+
+
+def test_an_object_thinner_than_a_voxel_still_occupies_the_voxel_of_its_centre():
+    # a 2 mm plate between two layers of voxel centres (1 cm apart) holds none of them: it occupies the voxel
+    # holding its centre; a plate that holds centres keeps exactly those
+    spec = new_spec()
+    add_free_body(spec, "plate", (0.003, 0.003, 0.01), [box([0.05, 0.05, 0.001])])
+    add_free_body(spec, "slab", (0.1, 0.1, 0.005), [box([0.03, 0.03, 0.001])])
+    model, data, ids = _compile(spec, [("plate", "plate"), ("slab", "slab")])
+    grid = OccupancyLabeler(model, ids, BOUNDS, VOXEL).capture(data)
+    np.testing.assert_array_equal(np.argwhere(grid.instance == 1), [[20, 20, 1]])
+    assert (grid.instance == 2).sum() == 36          # its centres at z 0.005: 6 x 6 of them, nothing added
