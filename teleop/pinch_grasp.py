@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -132,17 +133,22 @@ def hand_kinematics(hand_name: str) -> HandKinematics:
 
 
 def pinch_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float,
-                   fingers: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   fingers: tuple[str, ...] | None = None,
+                   other_gap: Callable[[np.ndarray], float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The pre-shape to come down with: actuator targets on the way from ``open_`` to ``close``, as
-    closed as possible while the thumb pad stays ``width_m`` from every pinching pad, and the point
-    midway between the thumb pad and the pinching pads there (wrist-site frame, right hand), where
-    the object's centre goes so that both sides close in on it together."""
+    closed as possible while the thumb pad stays ``width_m`` from every pinching pad (and, if given,
+    ``other_gap(q)`` is at least ``width_m`` too: teleop/pinch_tips.py), and the point midway between
+    the thumb pad and the pinching pads there (wrist-site frame, right hand), where the object's centre
+    goes so that both sides close in on it together."""
     kin = hand_kinematics(hand_name)
     thumb, tips = pinch_rows(hand_name, pinch_grasp(hand_name, fingers).fingers)
     for s in np.linspace(1.0, 0.0, 21):      # ends at s = 0, the open hand, if nothing is wide enough
         q = open_ + s * (close - open_)
         P = kin.points(q)
-        if min(np.linalg.norm(P[thumb] - P[t]) for t in tips) >= width_m:
+        gap = min(np.linalg.norm(P[thumb] - P[t]) for t in tips)
+        if other_gap is not None:
+            gap = min(gap, other_gap(q))
+        if gap >= width_m:
             break
     middle = 0.5 * (P[thumb] + P[tips].mean(axis=0))
     return q, kin.hand.wrist_site.to_local(middle)

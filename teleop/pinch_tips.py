@@ -18,26 +18,16 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.flat_pinch import tip_points
-from teleop.pinch_grasp import hand_kinematics, pinch_grasp, pinch_rows
-
-PRESHAPE_STEPS = 21     # as pinch_preshape: shapes tried on the way from closed back to open
+from teleop.pinch_grasp import pinch_grasp, pinch_preshape
 
 
 def tips_clear_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float,
                         fingers: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """As ``pinch_preshape``, with the thumb's tip too ``width_m`` from every pinching finger's tip:
-    (actuator targets on the way from ``open_`` to ``close``, the point midway between the thumb's pad
-    and the pinching pads there, wrist-site frame, right hand); the open hand if nothing is that wide."""
-    kin = hand_kinematics(hand_name)
-    fingers = pinch_grasp(hand_name, fingers).fingers
-    thumb, pads = pinch_rows(hand_name, fingers)
-    for s in np.linspace(1.0, 0.0, PRESHAPE_STEPS):
-        q = open_ + s * (close - open_)
-        P = kin.points(q)
-        T = tip_points(hand_name, fingers, q)
-        pad_gap = min(np.linalg.norm(P[thumb] - P[p]) for p in pads)
-        tip_gap = min(np.linalg.norm(T[0] - T[k]) for k in range(1, len(T)))
-        if min(pad_gap, tip_gap) >= width_m:
-            break
-    middle = 0.5 * (P[thumb] + P[pads].mean(axis=0))
-    return q, kin.hand.wrist_site.to_local(middle)
+    """``pinch_preshape`` with the thumb's tip too ``width_m`` from every pinching finger's tip."""
+    pinching = pinch_grasp(hand_name, fingers).fingers     # the fingers the thumb closes against
+
+    def tip_gap(q: np.ndarray) -> float:      # thumb tip to the nearest pinching tip
+        T = tip_points(hand_name, pinching, q)
+        return min(float(np.linalg.norm(T[0] - T[k])) for k in range(1, len(T)))
+
+    return pinch_preshape(hand_name, open_, close, width_m, fingers, other_gap=tip_gap)

@@ -240,9 +240,9 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
                                axis) + PINCH_SPREAD_MARGIN_M
         # the pads towards the thumb's (the step's own fingers, else the hand's), within the actuator ranges
         close = np.clip(pinch_grasp(side["hand"], fingers).close, *op.scene.model.actuator_ctrlrange[side["hand_ids"]].T)
-        ready, centre = pinch_preshape(side["hand"], open_, close, width, fingers)
-        if item.get("pinch_clear_tips"):    # spread until the curled fingertips clear the part too
-            ready, centre = tips_clear_preshape(side["hand"], open_, close, width, fingers)
+        # with pinch_clear_tips: spread until the curled fingertips clear the part too
+        preshape = tips_clear_preshape if item.get("pinch_clear_tips") else pinch_preshape
+        ready, centre = preshape(side["hand"], open_, close, width, fingers)
         offset = hand_rot @ (mirror_vec(centre) if item["hand"] == "left" else centre) - at
         closing = [(DURATIONS["close"] + DURATIONS["close_late"], close, None)]
     else:
