@@ -40,6 +40,7 @@ class TipPinch:
     close: np.ndarray           # actuator targets (hand order): the thumb's tip on the fingers' tips
     gap_m: float                # largest remaining distance between the thumb's tip and a finger's
     fingers: tuple[str, ...]    # the fingers the thumb pinches against (the pad pinch's)
+    moving: np.ndarray          # (hand order) the actuators of the thumb and those fingers; the rest stay folded
 
 
 def _tips(hand_name: str, fingers: tuple[str, ...]) -> list[tuple[int, np.ndarray]]:
@@ -98,8 +99,8 @@ def tip_pinch(hand_name: str) -> TipPinch:
         q, q_gap, damping = damped_step(kin, q, cols, A, r, damping, gap, q_gap)
         if q_gap <= 0.2 * MEET_M:
             break
-    q.flags.writeable = False       # cached: shared by every caller
-    return TipPinch(close=q, gap_m=q_gap, fingers=fingers)
+    q.flags.writeable = moving.flags.writeable = False       # cached: shared by every caller
+    return TipPinch(close=q, gap_m=q_gap, fingers=fingers, moving=moving)
 
 
 def tip_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float) -> tuple[np.ndarray, np.ndarray]:

@@ -17,7 +17,6 @@ from __future__ import annotations
 import numpy as np
 
 from teleop.flat_pinch import tip_pinch, tip_points
-from teleop.pinch_grasp import hand_kinematics, moving_and_folded, pinch_rows
 
 FD_STEP = 1e-5      # rad: finite-difference step of the tips' Jacobian
 
@@ -29,12 +28,11 @@ def squeezed(hand_name: str, close: np.ndarray, ready: np.ndarray, depth_m: floa
     close = np.asarray(close, float)
     if depth_m <= 0.0:
         return close.copy()
-    fingers = tip_pinch(hand_name).fingers
+    pinch = tip_pinch(hand_name)
+    fingers = pinch.fingers
     P = tip_points(hand_name, fingers, ready)
     axis = P[1:].mean(axis=0) - P[0]
     axis /= np.linalg.norm(axis)
-    thumb, tips = pinch_rows(hand_name, fingers)
-    moving, _ = moving_and_folded(hand_kinematics(hand_name), [thumb, *tips])
 
     def along(q: np.ndarray) -> float:      # the thumb's tip past the fingers' tips, along the axis
         T = tip_points(hand_name, fingers, q)
@@ -42,7 +40,7 @@ def squeezed(hand_name: str, close: np.ndarray, ready: np.ndarray, depth_m: floa
 
     base = along(close)
     grad = np.zeros(len(close))
-    for c in np.flatnonzero(moving):
+    for c in np.flatnonzero(pinch.moving):
         dq = close.copy()
         dq[c] += FD_STEP
         grad[c] = (along(dq) - base) / FD_STEP

@@ -30,8 +30,6 @@ of the white one: 10 and 8 of 12 within the task's tolerance once let go (tests/
 
 from __future__ import annotations
 
-import functools
-
 import mujoco
 import numpy as np
 
@@ -39,7 +37,6 @@ from sim.demo_plan import TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from teleop.flat_pinch import tip_axis, tip_pinch
 from teleop.operator_motion import UP, SideTimeline, quat, yawed
-from teleop.pinch_grasp import hand_kinematics, moving_and_folded, pinch_rows
 from teleop.plan_steps.operator import PlanningOperator
 
 LIFTED_M = 0.02         # an object this far above where it lay has been picked up
@@ -65,23 +62,13 @@ def square_turn(obj_rot: np.ndarray, target_rot: np.ndarray, half_extents) -> fl
     return float((turn + period / 2) % period - period / 2)
 
 
-@functools.lru_cache(maxsize=None)
-def pinching_actuators(hand_name: str) -> np.ndarray:
-    """(hand order) True for the actuators that move the flat pinch's thumb or pinching fingers (tip_pinch's
-    fingers); False for the fingers it keeps folded away."""
-    thumb, tips = pinch_rows(hand_name, tip_pinch(hand_name).fingers)
-    moving, _ = moving_and_folded(hand_kinematics(hand_name), [thumb, *tips])
-    moving.flags.writeable = False      # cached: shared by every caller
-    return moving
-
-
 def relaxed_release(side: dict, frames: slice, folded: np.ndarray, fraction: float):
     """A look (on_frame_end) as the hand lets go: the thumb and the pinching fingers open from the joint
     positions they hold at, ``fraction`` of the way to the open hand, for the keyframes ``frames`` (open,
     ease off, retreat); the other fingers stay ``folded``. A person relaxes a grip rather than opening to a
     shape: the held tips sit centimetres from where the pre-shape puts them, and opening to it swept them
     across the piece."""
-    pinching = pinching_actuators(side["hand"])
+    pinching = tip_pinch(side["hand"]).moving
 
     def relax(now: mujoco.MjData) -> None:
         held = np.asarray(now.actuator_length[side["hand_ids"]], float)
@@ -115,7 +102,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     if item.get("release_pinch_only"):
         # the folded fingers stay as they held: eased to the pre-shape they came down onto a jigsaw piece's edge
         # and lifted it with the hand (green and red pieces within tolerance on 3 -> 9 of 12, stream path)
-        opened.hand = np.where(pinching_actuators(side["hand"]), opened.hand, tl.frames[lower_frame].hand)
+        opened.hand = np.where(tip_pinch(side["hand"]).moving, opened.hand, tl.frames[lower_frame].hand)
     # slide the thumb off the object's side before lifting the hand away
     retreat = tl.frames.pop()
     axis = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand)

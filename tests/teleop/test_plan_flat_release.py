@@ -12,10 +12,10 @@ from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
-from teleop.plan_steps.flat_place import PRESS_M, pinching_actuators
+from teleop.flat_pinch import tip_pinch
+from teleop.plan_steps.flat_place import PRESS_M
 from teleop.plan_steps.pick_place import flat_pinch
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.02, -0.016],
@@ -30,9 +30,7 @@ def _parse(step: dict):
 def _op(step: dict):
     spec, plan = _parse(step)
     scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), EMBODIMENT, 0)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return op, data
 
 
@@ -57,7 +55,7 @@ def test_release_pinch_only_keeps_the_folded_fingers_as_they_held():
     # from the end: back home, retreat, ease off, open, lower (holding)
     retreat, ease, opened, lower = frames[-2], frames[-3], frames[-4], frames[-5]
     ready = flat_pinch(op, data, op.scene.task.demo_plan[0], "green_piece")[1]     # the pre-shape it came down with
-    pinching = pinching_actuators("sharpa")
+    pinching = tip_pinch("sharpa").moving
     assert pinching.any() and not pinching.all()
     assert np.allclose(opened.hand[pinching], ready[pinching])
     assert np.allclose(opened.hand[~pinching], lower.hand[~pinching])
@@ -100,7 +98,7 @@ def test_release_relax_opens_the_pinching_digits_from_where_they_hold():
     mujoco.mj_forward(op.scene.model, data)
     held = data.actuator_length[side["hand_ids"]].copy()
     relax[0](data)
-    pinching = pinching_actuators("sharpa")
+    pinching = tip_pinch("sharpa").moving
     for frame in frames[-4:-1]:     # open, ease off, retreat
         assert np.allclose(frame.hand[pinching], (held + 0.6 * (side["open"] - held))[pinching])
         assert np.allclose(frame.hand[~pinching], lower.hand[~pinching])
