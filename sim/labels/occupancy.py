@@ -62,14 +62,14 @@ class OccupancyLabeler:
         for g in labelled[welded]:            # one geom at a time: a block's arrays at most in memory
             np.maximum.at(self._static, *self._inside(np.array([g]), rest))
         objects = labelled[ids.geom_instance[labelled] > 0]        # geoms of objects (those with instance ids)
+        moving = np.isin(objects, self.dynamic)
+        self._moving_objects = objects[moving]
         self._in_static = np.zeros(int(ids.geom_instance.max(initial=0)) + 1, bool)   # [instance] has a static voxel
         self._in_static[self._static & 0xFFFF] = True
-        voxels, keys = self._thin_objects(objects[np.isin(objects, self.dynamic, invert=True)],
-                                          *self._inside(np.zeros(0, int), rest), rest)
+        voxels, keys = self._thin_objects(objects[~moving], np.zeros(0, np.int64), np.zeros(0, np.uint32), rest)
         np.maximum.at(self._static, voxels, keys)
         self._in_static[keys & 0xFFFF] = True
         self._in_static[0] = False      # instance 0: no object
-        self._moving_objects = objects[np.isin(objects, self.dynamic)]
         self._semantic, self._instance = _split(self._static)
         self._merged = np.zeros_like(self._static)    # scratch, all zero between captures
 
@@ -144,7 +144,6 @@ class OccupancyLabeler:
                 inside[run] = primitive_contains(int(t), size, x[run], y[run], z[run])
         return voxels[inside], np.repeat(self.key[geoms], count)[inside]
 
-
     def _thin_objects(self, geoms: np.ndarray, voxels: np.ndarray, keys: np.ndarray,
                       data: mujoco.MjData) -> tuple[np.ndarray, np.ndarray]:
         """`voxels` and `keys` (of `_inside`) with, for each object among `geoms` that holds no voxel in
@@ -152,7 +151,7 @@ class OccupancyLabeler:
         if not len(geoms):
             return voxels, keys
         present = self._in_static.copy()
-        present[(keys & 0xFFFF)] = True
+        present[keys & 0xFFFF] = True
         missing = geoms[~present[self.key[geoms] & 0xFFFF]]
         if not len(missing):
             return voxels, keys

@@ -196,10 +196,10 @@ class GraspFields(CatalogModel):
     # a flat pinch's closed tips aimed this far past each other: a firmer hold (teleop/pinch_squeeze.py)
     grasp_squeeze_m: Number = Field(None, ge=SQUEEZE_RANGE_M[0], le=SQUEEZE_RANGE_M[1],
                                     description=f"metres in [{SQUEEZE_RANGE_M[0]:g}, {SQUEEZE_RANGE_M[1]:g}]")
-
     # a pad pinch's pre-shape spread until its fingertips, not only its pads, clear the part (curled fingertips
     # that reach past the pads land on a thin rim otherwise; teleop/pinch_tips.py)
     pinch_clear_tips: Bool = False
+
     @field_validator("grasp", mode="before")
     @classmethod
     def _a_grasp(cls, grasp: str) -> str:
@@ -227,9 +227,9 @@ class GraspFields(CatalogModel):
         _only_with_grasp("pinch", "the fingers the thumb's pad closes against"))
     _flat_pinch_only = field_validator("grasp_squeeze_m", mode="before")(
         _only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
-
     _pad_pinch_clear_tips = field_validator("pinch_clear_tips", mode="before")(
         _only_with_grasp("pinch", "a pad pinch's pre-shape spread until its fingertips clear the part"))
+
     @field_validator("pinch_fingers")
     @classmethod
     def _distinct_fingers(cls, fingers: list[str]) -> list[str]:
