@@ -8,10 +8,9 @@ import numpy as np
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import parse_task
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 
 from task_files import task_file_with_plan
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "fridge_wine_interhand_pour", "ur5_rh5dg2"
 # open the door, take the bottle out by its neck and hand it to the right by its bottom, pour (kept in hand),
@@ -29,9 +28,7 @@ def planned_scene(steps: list[dict], tmp_path):
     """(scene, homed data, operator that has planned ``steps``) on seed 0's scene."""
     task = parse_task(task_file_with_plan(TASK, steps), tmp_path / "fridge.yaml")
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, demonstration_seed(TASK, 0)))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

@@ -16,8 +16,8 @@ from teleop.flat_pinch import tip_axis
 from teleop.operator_motion import DURATIONS, yawed
 from teleop.plan_steps.pick_place import flat_pinch
 from teleop.plan_steps.flat_place import EASE_M, EASE_STEPS, EASE_UP_M, _mat, _yaw, square_turn
-from teleop.recorder import home, record_episode
-from teleop.scripted_operator import ScriptedOperator
+from teleop.recorder import record_episode
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 # beside the white piece, 8 mm clear of it (a piece let go against it lands on its edge), 2.6 cm short
@@ -49,9 +49,7 @@ def _op(steps, seed=0):
     plan = parse_plan("t.yaml", {"demo_plan": steps}, PlanScope(spec.objects, spec.zones, spec.points))
     spec = dataclasses.replace(spec, demo_plan=plan)       # not load_task's cached one
     scene = demonstration_scene(spec, EMBODIMENT, seed)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return op, data
 
 

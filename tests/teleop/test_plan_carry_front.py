@@ -16,9 +16,8 @@ from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.plan_steps.carry import AT_HOME_M, FINGERS_DOWN_DEG, RIM_CLEAR_M, SQUEEZE_M, fingers_pitch
 from teleop.plan_steps.front_place import OUTSIDE_M, RELEASE_GAP_M
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import bounding_box_points, hand_outline
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "microwave_bowl_loading", "ur5_schunk"
 # grasp_height: the palms this far above its centre, so that level their lower edge clears its bottom
@@ -42,9 +41,7 @@ def _planned(tmp_path, before=()):
     raw["demo_plan"] = [*before, {**raw["demo_plan"][0], "after": list(range(len(before)))}]
     task = parse_task(raw, tmp_path / "microwave.yaml")
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

@@ -9,11 +9,9 @@ from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 from teleop.flat_pinch import flat_pinch_rotation, tip_pinch, tip_points, tip_preshape
 from teleop.pinch_grasp import MEET_M, hand_kinematics
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import hand_outline
 
-from plan_runs import rise_through_lift
+from plan_runs import home_and_plan, rise_through_lift
 from task_files import task_file_with_plan
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
@@ -57,9 +55,7 @@ def test_flat_pinch_lifts_a_jigsaw_piece():
     spec = load_task(TASK)
     spec = type(spec)(**{**spec.__dict__, "demo_plan": [dict(PICK)]})
     scene = demonstration_scene(spec, EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     assert rise_through_lift(scene, data, op, "green_piece") > 0.08
 
 
@@ -69,9 +65,7 @@ def test_a_flat_pinch_closes_either_side_of_its_grasp_point():
     from teleop.plan_steps.pick_place import flat_pinch
     spec = load_task(TASK)
     scene = demonstration_scene(spec, EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     point = [0.02, -0.01, 0.0]
     rot, _, centred, _ = flat_pinch(op, data, dict(PICK), "green_piece")
     rot_at, _, at, _ = flat_pinch(op, data, {**PICK, "grasp_point": point}, "green_piece")

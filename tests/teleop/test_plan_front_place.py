@@ -18,9 +18,8 @@ from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_pres
 from teleop.plan_steps.front_place import OUTSIDE_M, RELEASE_GAP_M, opening
 from teleop.plan_steps.part_pinch import part_width
 from teleop.plan_steps.pick_place import PINCH_SPREAD_MARGIN_M
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 from teleop.transit import bounding_box_points
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "microwave_bowl_loading", "ur5_schunk"
 STEP = {"hand": "right", "pick": "bowl", "place": "microwave", "place_from": "front", "grasp_point": [0.07, 0.0, 0.03]}
@@ -36,9 +35,7 @@ def _raw(**fields):
 def _planned(tmp_path, **fields):
     task = parse_task(_raw(**fields), tmp_path / "microwave.yaml")
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

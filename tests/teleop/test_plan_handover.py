@@ -13,10 +13,9 @@ from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import parse_task
 from teleop.plan_steps.held import planner
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 
 from task_files import task_file_with_plan
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "fridge_wine_interhand_pour", "ur5_rh5dg2"
 # the left takes the bottle out by its neck, the right takes its body, palm turned partly up
@@ -39,9 +38,7 @@ def _task(steps, tmp_path, door=True):
 
 def _planned(steps, tmp_path, door=True):
     scene = demonstration_scene(_task(steps, tmp_path, door), EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 

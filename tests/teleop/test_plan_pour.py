@@ -13,8 +13,7 @@ from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task
 from teleop.operator_motion import axis_rotation, quat
 from teleop.plan_steps.pour import POUR_DURATIONS, mouth_local
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "frypan_stand_pour", "ur5_schunk"
 MIN_TILT_DEG, RADIUS_M = 50.0, 0.12          # the task's tilted_over stage
@@ -54,9 +53,7 @@ def test_check_accepts_a_pour():
 def _operator(step):
     scene = demonstration_scene(TASK, EMBODIMENT, 0)
     scene.task = dataclasses.replace(scene.task, demo_plan=_check(**step))    # a copy: the cached task keeps its plan
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 
@@ -175,9 +172,7 @@ def test_check_accepts_a_point():
 def _point_operator():
     scene = demonstration_scene(POINT_TASK, POINT_EMBODIMENT, 0)
     scene.task = dataclasses.replace(scene.task, demo_plan=_check_point())
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     # the point as the evaluator resolves it: its z is from the table top
     point = np.asarray(scene.task.points[POINT], float) + [0.0, 0.0, scene.table_height]
     return scene, data, op, point

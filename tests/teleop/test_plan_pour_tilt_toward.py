@@ -16,8 +16,8 @@ from sim.scene.builder import build_scene, demonstration_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS
-from teleop.recorder import home, record_episode
-from teleop.scripted_operator import ScriptedOperator
+from teleop.recorder import record_episode
+from plan_runs import home_and_plan
 
 TASK, EMBODIMENT = "toilet_lid_cleaner_pour", "xarm7_leap"
 POUR = {"hand": "left", "pour": "cleaner", "into": "bowl_left", "grasp": "side"}
@@ -39,9 +39,7 @@ def _tipped_mouth_x(toward) -> float:
     """x of the cleaner's mouth axis in the most tipped keyframe of a pour planned with ``toward``."""
     scene = demonstration_scene(TASK, EMBODIMENT, 0)
     scene.task = dataclasses.replace(scene.task, demo_plan=_plan([{**POUR, "tilt_toward": toward}]))
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     frames = op.sides["left"]["timeline"].frames
     body = scene.object_body_ids["cleaner"]
 

@@ -11,10 +11,8 @@ from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 from teleop.plan_steps.pick_place import SIDE_GRASP_IN_M
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 
-from plan_runs import rise_through_lift
+from plan_runs import home_and_plan, rise_through_lift
 from task_files import task_file_with_plan
 
 TASK, EMBODIMENT = "tool_box_loading", "panda_orca"
@@ -45,9 +43,7 @@ def _operator(step: dict):
     objects["drill"] = dataclasses.replace(objects["drill"], xy=(0.30, 0.05))     # within the right arm's easy reach
     spec = dataclasses.replace(spec, objects=objects, demo_plan=[step])
     scene = demonstration_scene(spec, EMBODIMENT)
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
+    data, op = home_and_plan(scene)
     return scene, data, op
 
 
