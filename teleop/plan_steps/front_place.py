@@ -18,8 +18,9 @@ import numpy as np
 
 from sim.errors import SpecError
 from teleop.geom_rays import body_geoms, nearest_hit
-from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
+from teleop.operator_motion import DURATIONS, UP, SideTimeline
 from teleop.plan_steps.operator import PlanningOperator
+from teleop.plan_steps.upright_look import upright_look
 from teleop.transit import bounding_box_points, hand_outline
 
 # the object's bottom above the cavity floor while it slides in: a bowl held by its rim hangs tilted
@@ -128,29 +129,9 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     tl.add(DURATIONS["retreat"], pos=place + rise * UP + back * out)
     # ... and how it leans: it goes in upright (a bottle handed over hangs in the hand as the giver let it go)
     up = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).T @ UP     # its up as it stood
-    op.on_frame_end(side, first - 1, upright_in_place(op, side, name, up, R_hand.reshape(3, 3), offset.copy(),
-                                                      range(first, len(tl.frames))))
+    op.on_frame_end(side, first - 1, upright_look(op, side, name, up, R_hand.reshape(3, 3), offset.copy(),
+                                                  range(first, len(tl.frames)), recentre_when_upright=True))
     op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
     tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
 
 
-def upright_in_place(op: PlanningOperator, side: dict, name: str, up_local: np.ndarray, hand_rot: np.ndarray,
-                     offset: np.ndarray, frames: range):
-    """The look outside the opening: how the carried object now sits in the hand (where, and how it leans).
-    The hand turns by what the object's up (``up_local``, its frame) is off vertical, and the slide-in and
-    release keyframes (``frames``, planned for the object at ``offset`` from the wrist, hand turned
-    ``hand_rot``) move so that it still ends where planned: it is set down upright, not leaning over."""
-    def adjust(data: mujoco.MjData) -> None:
-        body = op.scene.object_body_ids[name]
-        wrist_rot = data.site_xmat[side["wrist_site_id"]].reshape(3, 3)
-        at = wrist_rot.T @ (data.xpos[body] - data.site_xpos[side["wrist_site_id"]])      # wrist frame
-        if np.linalg.norm(at) > np.linalg.norm(offset) + NOT_IN_HAND_M:      # not in the hand any more
-            return
-        up = hand_rot @ (wrist_rot.T @ data.xmat[body].reshape(3, 3)) @ up_local    # its up, the hand as planned
-        turn = np.cross(up, UP)
-        angle = float(np.arctan2(np.linalg.norm(turn), up @ UP))
-        rot = axis_rotation(turn / np.linalg.norm(turn), angle) @ hand_rot if np.linalg.norm(turn) > 1e-9 else hand_rot
-        moved = offset - rot @ at           # the keyframes were the wrist for `offset`; now for the new hold
-        for frame in side["timeline"].frames[frames.start:frames.stop]:
-            frame.pos, frame.quat = frame.pos + moved, quat(rot)
-    return adjust

@@ -10,7 +10,7 @@ back upright, carry it to where it came from (or to `place_offset` on the table)
 that is reached, the palm ending under the pourer (a hand holds best what rests in it), else the
 smaller joint motion. `grasp_yaw` and `grasp_point` place the grasp as for `pick`. Turned back, the
 operator looks at how the pourer now sits in the hand and turns it upright by the pourer itself
-(upright_in_hand); let go, the open hand rises clear of its top before it moves on.
+(teleop/plan_steps/upright_look.py); let go, the open hand rises clear of its top before it moves on.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ from teleop.plan_steps.held import keep, take
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import (PALM_NORMAL, SIDE_GRASP_ROLL_DEG, grasp_and_lift, lower_and_release,
                                          place_centre, planned_top, rest_centre)
+from teleop.plan_steps.upright_look import upright_look
 from teleop.transit import CLEARANCE_M, hand_outline
 
 
@@ -165,8 +166,8 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         keep(op, item["hand"], name, offset, obj_rot)
     else:
         set_down(op, data, item, name, offset, hand_rot, start)
-    op.on_frame_end(side, untilted, upright_in_hand(op, side, name, axis_local, hand_rot, offset,
-                                                    range(untilted + 1, len(tl.frames))))
+    op.on_frame_end(side, untilted, upright_look(op, side, name, axis_local, hand_rot, offset,
+                                                 range(untilted + 1, len(tl.frames)), recentre_when_upright=False))
 
 
 def mouth_over_target(op: PlanningOperator, side: dict, name: str, target: str, planned: np.ndarray, frames: range):
@@ -209,27 +210,3 @@ def set_down(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, o
     lower_and_release(op, item, name, offset, place, rise_to=top + CLEARANCE_M - lowest)
 
 
-def upright_in_hand(op: PlanningOperator, side: dict, name: str, axis_local: np.ndarray, hand_rot: np.ndarray,
-                    offset: np.ndarray, frames: range):
-    """The look after the pourer is turned back: a bottle that turned in the grip while tipped (it
-    does, held from the side) stands tilted in a hand turned back level, and set down so it falls
-    over. A person turns it upright by the bottle itself: the hand turns by what the bottle is
-    off vertical, and the set-down keyframes (``frames``) move with the bottle's new place in it."""
-    def adjust(data: mujoco.MjData) -> None:
-        body = op.scene.object_body_ids[name]
-        wrist_rot = data.site_xmat[side["wrist_site_id"]].reshape(3, 3)
-        in_hand = wrist_rot.T @ data.xmat[body].reshape(3, 3)
-        at = wrist_rot.T @ (data.xpos[body] - data.site_xpos[side["wrist_site_id"]])
-        if np.linalg.norm(at) > np.linalg.norm(offset) + NOT_IN_HAND_M:      # not in the hand any more
-            return
-        up = hand_rot @ in_hand @ axis_local                # where the mouth would point, hand level
-        turn = np.cross(up, UP)
-        angle = float(np.arctan2(np.linalg.norm(turn), up @ UP))
-        if angle < 1e-6 or np.linalg.norm(turn) < 1e-9:      # upright, or upside down: no axis to turn about
-            return
-        rot = axis_rotation(turn / np.linalg.norm(turn), angle) @ hand_rot
-        moved = offset - rot @ at           # each keyframe was the wrist for `offset`; now for the new hold
-        for frame in side["timeline"].frames[frames.start:frames.stop]:
-            frame.pos, frame.quat = frame.pos + moved, quat(rot)
-        offset[:] = rot @ at                # lower_and_release's slip correction measures against it
-    return adjust

@@ -9,8 +9,8 @@ lowest point VIA_OVER_CLEARANCE_M above the object's top. Between stops the hand
 object clears every stop's top, moves across level, and comes down; the hand keeps the grasp's turn
 throughout (nothing is tipped). When it sets off for a stop the operator looks where that object is now
 (a bowl held in the other hand sits where that hand holds it, not quite where it was planned); after the
-last stop it turns the object back to how it stood when picked, by the object itself (pour.py's
-upright_in_hand: a ladle swings in a pinch), before setting it down.
+last stop it turns the object back to how it stood when picked, by the object itself (upright_look.py:
+a ladle swings in a pinch), before setting it down.
 `hold: true` carries the object to its place and keeps it there in the hand instead of letting go
 (teleop/plan_steps/held.py): the hand's next step naming it starts from holding it (a `pick` carries it
 on to its place, let go as it was taken). Once it is lifted, and again when that next step starts, the
@@ -34,7 +34,7 @@ from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import (SIDE_GRASP_IN_M, carry_and_place, carry_height, grasp_and_lift,
                                          place_centre, planned_top, side_roll)
-from teleop.plan_steps.pour import upright_in_hand
+from teleop.plan_steps.upright_look import upright_look
 
 VIA_INSIDE_DEPTH_M = 0.025      # `inside`: the via point this far below the container's rim (a ladle's bowl dipped in)
 VIA_OVER_CLEARANCE_M = 0.03     # `over` and between stops: the carried object's lowest point this far above a top
@@ -205,8 +205,8 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     if "via" in item:       # swung in the hand on the way (a ladle in a pinch): set down standing as it stood
         hand_rot = np.zeros(9)
         mujoco.mju_quat2Mat(hand_rot, tl.frames[last_stop].quat)
-        op.on_frame_end(side, last_stop, upright_in_hand(op, side, name, rotation.T @ UP, hand_rot.reshape(3, 3),
-                                                         offset, range(last_stop + 1, len(tl.frames))))
+        op.on_frame_end(side, last_stop, upright_look(op, side, name, rotation.T @ UP, hand_rot.reshape(3, 3), offset,
+                                                      range(last_stop + 1, len(tl.frames)), recentre_when_upright=False))
     if settle is not None:
         settle[1] = len(side["timeline"].frames)
 

@@ -18,7 +18,7 @@ NAME = "wine_bottle"
 def test_the_bottle_goes_in_upright_and_where_planned(tmp_path):
     scene, data, op = planned_scene(PLAN, tmp_path)    # up to the bottle put back through the front (held: handed back)
     side = op.sides["left"]
-    looks = [(step, fn) for step, fn in side["looks"] if fn.__qualname__.startswith("upright_in_place")]
+    looks = [(step, fn) for step, fn in side["looks"] if fn.__qualname__.startswith("upright_look")]
     assert len(looks) == 1, "one look, outside the opening"
     step, look = looks[0]
     frames = side["timeline"].frames
