@@ -122,10 +122,10 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     front = item.get("place_from") == PLACE_FROM_FRONT
     if front:       # slid in level through the container's side opening, let go on its floor
         between = (op.sides["right"]["home"][0] + op.sides["left"]["home"][0]) / 2    # where the hands rest
-        way_in = side_opening(op, data, item["place"], between)
+        place = front_release(op, data, item, name)
+        way_in = side_opening(op, data, item["place"], between, rays_at=float(place[2]))   # at the compartment's height
         a, across, depth = across_opening(op.scene.model, data, op.scene.object_body_ids[name], way_in.out)
         f = -way_in.out                       # the fingers point in through the opening
-        place = front_release(op, data, item, name, way_in)
         carry_z = -np.inf
     else:
         a, across, depth = across_axis(body_rot, obj.half_extents)

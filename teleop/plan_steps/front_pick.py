@@ -61,7 +61,8 @@ def take_out_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     model = op.scene.model
-    way = side_opening(op, data, container_of(op, data, name, tl.end), side["home"][0])
+    way = side_opening(op, data, container_of(op, data, name, tl.end), side["home"][0],
+                       rays_at=float(op.object_pos(data, name)[2]))      # the compartment it stands in
     hand_rot, offset = side_hold(op, data, item["hand"], name, side_roll(item), grasp_point(item),
                                  approach_pitch(item), float(item.get("grasp_yaw", 0.0)))
     grasp = op.object_pos(data, name) - offset

@@ -5,8 +5,9 @@ The object is carried level to just outside the opening, its bottom clear of the
 in along the opening to its place; lowered onto the floor and let go; the open hand rises off it
 (within the cavity), is drawn back out the way it came and goes back to where it rests (it would
 stand in the way of a door shut next).
-The opening is found by rays from the cavity's centre against the container's own walls: its links
-(a door, open or shut) are not walls.
+The opening is found by rays against the container's own walls: its links (a door, open or shut) are
+not walls. The rays start at the cavity's centre raised or lowered to the height of what goes in or
+comes out: a shelf across the cavity's middle (a fridge's) is not in their way there.
 """
 
 from __future__ import annotations
@@ -65,25 +66,41 @@ class SideOpening(NamedTuple):
     ceiling: float
 
 
-def side_opening(op: PlanningOperator, data: mujoco.MjData, container: str, towards: np.ndarray) -> SideOpening:
-    """The side ``container`` is open at (of several, the one facing ``towards``) and its cavity."""
+def _cavity(op: PlanningOperator, data: mujoco.MjData, container: str):
+    """``container``'s body, rotation (world), cavity centre (world) and half extents (its frame)."""
     target = op.scene.task.objects[container]
     body = op.scene.object_body_ids[container]
     R = data.xmat[body].reshape(3, 3)
-    centre = data.xpos[body] + R @ np.asarray(target.interior_offset, float)
-    out = opening(op.scene.model, data, body, centre, towards, op.scene.task.source)
-    half = np.asarray(target.interior_half_extents, float)
+    return body, R, data.xpos[body] + R @ np.asarray(target.interior_offset, float), \
+        np.asarray(target.interior_half_extents, float)
+
+
+def cavity_floor(op: PlanningOperator, data: mujoco.MjData, container: str) -> float:
+    """The world height of ``container``'s cavity floor."""
+    _, R, centre, half = _cavity(op, data, container)
+    return float(centre[2]) - float(np.abs(R[2]) @ half)
+
+
+def side_opening(op: PlanningOperator, data: mujoco.MjData, container: str, towards: np.ndarray,
+                 rays_at: float | None = None) -> SideOpening:
+    """The side ``container`` is open at (of several, the one facing ``towards``) and its cavity; the
+    rays that find it start at the cavity's centre, at world height ``rays_at`` if given (the compartment
+    an object goes into or comes out of: from the cavity's middle they would start inside a shelf)."""
+    body, R, centre, half = _cavity(op, data, container)
+    rays_from = centre if rays_at is None else np.array([centre[0], centre[1], rays_at])
+    out = opening(op.scene.model, data, body, rays_from, towards, op.scene.task.source)
     mouth = centre + float(np.abs(R.T @ out) @ half) * out
     height = float(np.abs(R[2]) @ half)
     return SideOpening(out, mouth, centre, float(centre[2]) - height, float(centre[2]) + height)
 
 
-def front_release(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, way_in: SideOpening) -> np.ndarray:
+def front_release(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str) -> np.ndarray:
     """Where the centre of object ``name`` is let go in the step's `place`: `place_offset` [dx, dy] from
     the container's centre, the release gap above [dz above] the cavity floor."""
     dx, dy, dz = [*item.get("place_offset", [0.0, 0.0]), 0.0][:3]
     return np.array([*(op.object_pos(data, item["place"])[:2] + [dx, dy]),
-                     way_in.floor + dz + op.scene.task.objects[name].rest_height + RELEASE_GAP_M])
+                     cavity_floor(op, data, item["place"]) + dz + op.scene.task.objects[name].rest_height
+                     + RELEASE_GAP_M])
 
 
 def slide_start(place: np.ndarray, way_in: SideOpening, lead: float) -> tuple[float, np.ndarray]:
@@ -102,9 +119,11 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     side = op.sides[item["hand"]]
     tl: SideTimeline = side["timeline"]
     model = op.scene.model
-    way_in = side_opening(op, data, item["place"], side["home"][0])
+    # the opening is looked for at the height the object is let go at: the compartment it goes into
+    release = front_release(op, data, item, name)
+    way_in = side_opening(op, data, item["place"], side["home"][0], rays_at=float(release[2]))
     out = way_in.out
-    place = front_release(op, data, item, name, way_in) - offset      # wrist, letting go
+    place = release - offset      # wrist, letting go
     op.leaves(name, place + offset - RELEASE_GAP_M * UP, on=item["place"])
     # how far ahead of the wrist (into the opening) the open or closed hand and the object reach
     body_pts = bounding_box_points(model, data, op.scene.object_body_ids[name]) - op.object_pos(data, name) + offset
