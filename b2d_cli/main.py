@@ -66,9 +66,10 @@ def _rows(kind: str) -> list[dict]:
                          "stages": [s["id"] for s in t.metrics.get("stages", [])]})
         return rows
     if kind == "settings":
-        from sim.tasks import is_recordable
+        from sim.tasks import is_recordable, load_task
         return [{"key": s.key, "task": s.task, "embodiment": s.embodiment, "available": s.available,
-                 "recordable": is_recordable(s)} for s in registry.paper_settings()]
+                 "recordable": is_recordable(s), "draft_plan": load_task(s.task).demo_plan_draft}
+                for s in registry.paper_settings()]
     if kind == "profiles":
         rows = []
         for name in registry.names("sensor_profiles"):

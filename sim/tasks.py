@@ -108,6 +108,7 @@ class TaskSpec:
     metrics: dict
     source: Path
     raw: dict = field(repr=False, default_factory=dict)
+    demo_plan_draft: bool = False     # a plan without stable success yet: not recordable, benched when named
 
 
     @property
@@ -219,6 +220,7 @@ def parse_task(raw: dict, path: Path) -> TaskSpec:
         metrics=raw["metrics"],
         source=Path(path),
         raw=raw,
+        demo_plan_draft=m.demo_plan_draft,
     )
     try:   # compile the metrics block now: a bad predicate, stage graph or name fails at load time
         EpisodeEvaluator(task.metrics, task_context(task), source=str(path))
@@ -233,7 +235,13 @@ def load_task(name: str) -> TaskSpec:
     return parse_task(load_yaml(path), path)
 
 
+def has_finished_plan(task: str) -> bool:
+    """The task has a demonstration plan for the scripted operator that is not a draft."""
+    spec = load_task(task)
+    return bool(spec.demo_plan) and not spec.demo_plan_draft
+
+
 def is_recordable(setting: Setting) -> bool:
-    """Available and its task has a demonstration plan for the scripted operator. (Here, not on `Setting`:
-    the registry stays below the tasks, with no import back.)"""
-    return setting.available and bool(load_task(setting.task).demo_plan)
+    """Available and its task has a finished demonstration plan for the scripted operator. (Here, not on
+    `Setting`: the registry stays below the tasks, with no import back.)"""
+    return setting.available and has_finished_plan(setting.task)

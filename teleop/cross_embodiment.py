@@ -27,7 +27,7 @@ from sim.embodiment.description import load_embodiment
 from sim.errors import UnknownNameError
 from sim.registry import SETTING_SEPARATOR, names, parse_setting_key, validate_name
 from sim.scene.builder import demonstration_scene
-from sim.tasks import load_task
+from sim.tasks import has_finished_plan, load_task
 from teleop.demos import DEFAULT_OPERATOR, OPERATORS, record_demonstrations
 from teleop.recorder import episode_horizon, home
 from teleop.scripted_operator import IK_ITERS, ScriptedOperator
@@ -59,8 +59,8 @@ def parse_embodiments(value: str) -> list[str]:
 
 
 def recordable_tasks() -> list[str]:
-    """Tasks with a `demo_plan` (catalog order)."""
-    return [t for t in names("tasks") if load_task(t).demo_plan]
+    """Tasks with a finished `demo_plan` (catalog order; a draft runs only when named)."""
+    return [t for t in names("tasks") if has_finished_plan(t)]
 
 
 def parse_tasks(keys: list[str] | tuple[str, ...] | None) -> list[str]:

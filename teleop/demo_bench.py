@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 
 from episodes.workers import map_in_processes
-from sim.registry import paper_settings, parse_setting_key
-from sim.tasks import is_recordable
+from sim.registry import Setting, paper_settings, parse_setting_key
+from sim.tasks import is_recordable, load_task
 from teleop.cross_embodiment import markdown_table, parse_embodiments, parse_tasks, run_cross_embodiment_bench
 from teleop.demos import DEFAULT_OPERATOR, record_demonstrations
 
@@ -33,14 +33,20 @@ def record_one(task: str, embodiment: str, index: int, operator: str) -> dict:
             "seconds": time.perf_counter() - t0}
 
 
+def settings_to_run(only: list[str] | None = None) -> tuple[list[Setting], list[Setting]]:
+    """(the paper settings listed, those recorded): every recordable setting, or only the keys named; a
+    draft plan (no stable success yet) runs only when its setting is named."""
+    for key in only or ():
+        parse_setting_key(key)      # an unknown task or embodiment fails here, naming the valid ones
+    chosen = [s for s in paper_settings() if not only or s.key in only]
+    return chosen, [s for s in chosen if is_recordable(s) or (only and s.available and load_task(s.task).demo_plan)]
+
+
 def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: str = DEFAULT_OPERATOR,
                    processes: int = 1) -> dict:
     """Seeds 0..episodes-1 of every chosen paper setting with a plan, recorded in ``processes`` processes
     (the same episodes whatever the number: each seed is its own scene and operator)."""
-    for key in only or ():
-        parse_setting_key(key)      # an unknown task or embodiment fails here, naming the valid ones
-    chosen = [s for s in paper_settings() if not only or s.key in only]
-    recordable = [s for s in chosen if is_recordable(s)]
+    chosen, recordable = settings_to_run(only)
     units = [(s.task, s.embodiment, i, operator) for s in recordable for i in range(episodes)]
     t0 = time.perf_counter()
     results = iter(map_in_processes(record_one, units, processes))
@@ -60,7 +66,8 @@ def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: s
         succeeded += wins > episodes / 2
         rows.append({**row, "successes": wins, "mean_steps": round(steps / episodes, 1),
                      "seconds": round(seconds, 2), "ms_per_step": round(1e3 * seconds / max(steps, 1), 2),
-                     "status": f"{len(errors)} errors: {errors[0]}" if errors else "ok"})
+                     "status": f"{len(errors)} errors: {errors[0]}" if errors else "ok",
+                     **({"draft_plan": True} if load_task(setting.task).demo_plan_draft else {})})
     return {"settings": rows, "settings_with_majority_success": succeeded, "settings_listed": len(rows),
             "operator": operator, "processes": processes, "wall_seconds": round(wall, 2),
             "note": f"scripted operator ({operator}), demonstration seeds 0..episodes-1 of each setting; success = the "

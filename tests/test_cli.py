@@ -33,9 +33,11 @@ def test_list_json():
 
 def test_list_settings_says_which_can_be_recorded(unplanned):
     lines = CliRunner().invoke(cli, ["list", "settings"]).output.splitlines()
-    assert lines[0].split() == ["key", "task", "embodiment", "available", "recordable"]
-    recordable = {line.split()[1]: line.split()[-1] for line in lines[1:]}
+    assert lines[0].split() == ["key", "task", "embodiment", "available", "recordable", "draft_plan"]
+    recordable = {line.split()[1]: line.split()[-2] for line in lines[1:]}
+    draft = {line.split()[1]: line.split()[-1] for line in lines[1:]}
     assert len(lines) == 27 and recordable[TASK] == "yes" and recordable[unplanned] == "no"
+    assert recordable["fridge_fruit_shelf_sorting"] == "no" and draft["fridge_fruit_shelf_sorting"] == "yes"
 
 
 def test_unknown_name_is_a_clear_error(tmp_path):

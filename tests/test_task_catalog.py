@@ -12,6 +12,7 @@ import yaml
 from stage_states import episode_record, stage_value
 from task_scenes import settle
 
+from b2d_pipeline.partitions import recordable_setting_keys
 from sim.embodiment import embodiment_names
 from sim.registry import names, paper_settings
 from sim.scene.builder import build_scene
@@ -19,6 +20,8 @@ from sim.scene.parts import parts_aabb
 from sim.scene.sample import demonstration_sample
 from sim.tasks import is_recordable, load_task
 from tactile.targets import geom_mesh, target_geoms
+from teleop.cross_embodiment import recordable_tasks
+from teleop.demo_bench import settings_to_run
 
 STATES = yaml.safe_load((Path(__file__).parent / "task_stage_states.yaml").read_text())
 EPISODES = yaml.safe_load((Path(__file__).parent / "task_terminal_states.yaml").read_text())
@@ -48,10 +51,23 @@ def test_the_catalog_is_the_papers_26_tasks_on_their_embodiments():
         assert load_task(task).metrics.get("expert_horizon_steps"), task
 
 
-def test_only_tasks_with_a_demo_plan_are_recordable():
+def test_only_tasks_with_a_finished_demo_plan_are_recordable():
     recordable = sorted(s.task for s in paper_settings() if is_recordable(s))
-    assert recordable == sorted(t for t in names("tasks") if load_task(t).demo_plan)
+    finished = sorted(t for t in names("tasks") if load_task(t).demo_plan and not load_task(t).demo_plan_draft)
+    assert recordable == finished
     assert {"citrus_plate_loading", "condiment_box_loading", "canned_food_tray_arrangement"} <= set(recordable)
+
+
+def test_a_draft_plan_is_checked_but_not_recordable():
+    """A plan kept to work on (`demo_plan_draft: true`) is validated like any other and left out of the
+    recordable settings, the pipeline's partitions and `b2d list settings`' recordable column."""
+    task = load_task("fridge_fruit_shelf_sorting")
+    assert task.demo_plan and task.demo_plan_draft
+    setting = next(s for s in paper_settings() if s.task == task.name)
+    assert setting.available and not is_recordable(setting)
+    assert setting.key not in recordable_setting_keys()
+    assert setting not in settings_to_run()[1] and task.name not in recordable_tasks()
+    assert settings_to_run([setting.key])[1] == [setting]      # `b2d bench demos --setting KEY` runs it
 
 
 @pytest.mark.parametrize("task,embodiment", PAIRS, ids=[f"{t}-{e}" for t, e in PAIRS])
