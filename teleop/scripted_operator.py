@@ -12,6 +12,7 @@ sets off for it, and where a carried object sits in the hand before lowering it.
 from __future__ import annotations
 
 import dataclasses
+from typing import Callable
 
 import mujoco
 import numpy as np
@@ -179,10 +180,13 @@ class ScriptedOperator:
         back upright by how it sits, not by how the hand was."""
         side["looks"].append((side["timeline"].frames[frame].end_step, adjust))
 
-    def _reaim(self, side: dict, data: mujoco.MjData, step: int) -> None:
+    def reaim(self, side: dict, data: mujoco.MjData, step: int, where: Callable | None = None) -> None:
+        """The look as a hand sets off for an object: the frames of its approach move (level) with the
+        object from where it was planned to where it is, in ``data``, or ``where(name, frames)`` (the
+        kinematic dry run's stand-in: where the plan leaves it by then)."""
         while side["reaims"] and side["reaims"][0][0] <= step:
             _, name, planned, frames = side["reaims"].pop(0)
-            moved = self.object_pos(data, name) - planned
+            moved = (self.object_pos(data, name) if where is None else where(name, frames)) - planned
             moved[2] = 0.0
             for frame in side["timeline"].frames[frames]:
                 frame.pos = frame.pos + moved
@@ -212,7 +216,7 @@ class ScriptedOperator:
         stream path (``teleop/scripted_stream.py``) start from this."""
         out = {}
         for name, side in self.sides.items():
-            self._reaim(side, data, step)
+            self.reaim(side, data, step)
             self._correct_place(side, data, step)
             while side["looks"] and side["looks"][0][0] <= step:     # a plan step's own look (on_frame_end)
                 side["looks"].pop(0)[1](data)
