@@ -127,6 +127,15 @@ def solve_pinch(hand_name: str, fingers: tuple[str, ...], meet_m: float = MEET_M
 
 
 @functools.lru_cache(maxsize=None)
+def thumb_actuators(hand_name: str) -> np.ndarray:
+    """Which of the hand's actuators (hand actuator order) move the thumb's tip."""
+    kin = hand_kinematics(hand_name)
+    moving, _ = moving_and_folded(kin, [1 + fingertip_rows(hand_name, (THUMB_TIP,))[0]])
+    moving.flags.writeable = False      # cached: shared by every caller
+    return moving
+
+
+@functools.lru_cache(maxsize=None)
 def hand_kinematics(hand_name: str) -> HandKinematics:
     """The hand's own kinematic model (teleop/retarget), built once per hand."""
     return HandKinematics(hand_name)

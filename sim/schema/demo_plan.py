@@ -268,7 +268,8 @@ class PickStep(PlanStep, GraspFields):
     of it (teleop/plan_steps/via.py). With grasp: flat_pinch, release_pinch_only: true lets go opening only the
     thumb and the pinching fingers (the folded ones stay), place_press_m (metres) sets it down that far below
     its release height, and release_relax (a fraction) opens the thumb and the pinching fingers from where they
-    hold that far towards the open hand (teleop/plan_steps/flat_place.py)."""
+    hold that far towards the open hand (teleop/plan_steps/flat_place.py). close_thumb_last: true closes a power
+    grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed into the fingers' wall)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -292,6 +293,8 @@ class PickStep(PlanStep, GraspFields):
                                   description=f"metres in [{PRESS_RANGE_M[0]:g}, {PRESS_RANGE_M[1]:g}]")  # its release height
     # flat pinch: the pinching digits open from where they hold, this fraction of the way to open (not to the pre-shape)
     release_relax: Number = Field(None, gt=0.0, le=1.0, description="a fraction in (0, 1]")
+    # palm grasp: the thumb closes after the fingers, whatever the hand file's `late` (plan_steps/pick_place.py)
+    close_thumb_last: Bool = False
 
     @field_validator("hold", mode="before")
     @classmethod
@@ -317,6 +320,8 @@ class PickStep(PlanStep, GraspFields):
         return value
 
     _side_only = field_validator("grasp_roll_deg", mode="before")(_side_grasp_roll)
+    _power_only = field_validator("close_thumb_last", mode="before")(
+        _only_with_grasp("power", "the order a palm grasp closes in"))
     _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", mode="before")(
         _only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
 

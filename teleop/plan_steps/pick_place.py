@@ -23,7 +23,7 @@ from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yawed)
-from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape
+from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape, thumb_actuators
 from teleop.pinch_squeeze import squeezed
 from teleop.pinch_tips import tips_clear_preshape
 from teleop.plan_steps.flat_place import flat_place
@@ -139,6 +139,18 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     if item.get("grasp_squeeze_m"):     # the last stage presses the tips past each other (the wrist as planned)
         closing[-1] = (per, np.clip(squeezed(hand, close, ready, item["grasp_squeeze_m"]), lo, hi), closing[-1][2])
     return hand_rot, ready, offset, closing
+
+
+def power_closing(op: PlanningOperator, side: dict, item: dict) -> list:
+    """A palm grasp's closing keyframes: the early actuators form a wall, then the late ones press the object
+    against it. `close_thumb_last: true` makes the thumb's actuators (those moving its tip) the late ones,
+    whatever the hand file declares: on the Wuji a thumb closing with the fingers reached a 5.4 cm lemon
+    first and flicked it out on the lift (citrus_plate_loading)."""
+    if item.get("close_thumb_last"):
+        wall = np.where(thumb_actuators(side["hand"]), side["open"], side["closed"])
+    else:
+        wall = op.power(side, WALL)
+    return [(DURATIONS["close"], wall, None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
 
 
 def side_roll(item: dict) -> float:
@@ -258,7 +270,7 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
             # the hand closes on the grasp point; the object's centre sits `at` back from it
             clear = half_z - at[2] + PALM_CLEARANCE_M
             offset = hand_rot @ np.array([cx, max(cy, clear), cz]) - at
-        closing = [(DURATIONS["close"], op.power(side, WALL), None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
+        closing = power_closing(op, side, item)
         ready = open_
     hand_quat = quat(hand_rot)
     # `from_plan: true`: where an earlier step of the plan leaves it (a drag); planned from where it lay, the
