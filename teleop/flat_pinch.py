@@ -123,6 +123,14 @@ def tip_axis(hand_name: str, q: np.ndarray) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
+def tips_over_lowest(hand_name: str, side: str, q: np.ndarray, R: np.ndarray) -> float:
+    """How high the thumb's and the pinching fingers' lowest tip is over the hand's lowest point at
+    actuator targets ``q``, the hand turned ``R`` (world from wrist site)."""
+    tips = tip_points(hand_name, tip_pinch(hand_name).fingers, q)
+    tips = tips @ M if side == "left" else tips
+    return float((tips @ R.T)[:, 2].min() - (hand_outline(hand_name, side, q) @ R.T)[:, 2].min())
+
+
 def _turned(pitch_deg: float, roll_deg: float) -> np.ndarray:
     R = pitched_palm_down(pitch_deg)
     fingers = R @ (PALM_DOWN.T @ FORWARD)

@@ -46,6 +46,7 @@ VIA_KINDS = ("inside", "over")      # a pick's via stops: into a container's cav
 VIA_TIMES_RANGE = (1, 10)
 PRESS_RANGE_M = (0.0, 0.03)      # place_press_m: a flat pinch's object set down up to 3 cm below its release height
 SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed past each other, up to 5 cm
+TIPS_HEIGHT_RANGE_M = (0.0, 0.03)   # grasp_tips_height_m: a flat pinch's closed tips up to 3 cm over the object's bottom
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -196,6 +197,10 @@ class GraspFields(CatalogModel):
     # a flat pinch's closed tips aimed this far past each other: a firmer hold (teleop/pinch_squeeze.py)
     grasp_squeeze_m: Number = Field(None, ge=SQUEEZE_RANGE_M[0], le=SQUEEZE_RANGE_M[1],
                                     description=f"metres in [{SQUEEZE_RANGE_M[0]:g}, {SQUEEZE_RANGE_M[1]:g}]")
+    # a flat pinch's closed tips this high over the object's bottom (the hand pressed no deeper into the table than
+    # by default), e.g. half a handle's height, rather than the hand's lowest point pressed into the table
+    grasp_tips_height_m: Number = Field(None, ge=TIPS_HEIGHT_RANGE_M[0], le=TIPS_HEIGHT_RANGE_M[1],
+                                        description=f"metres in [{TIPS_HEIGHT_RANGE_M[0]:g}, {TIPS_HEIGHT_RANGE_M[1]:g}]")
     # a pad pinch's pre-shape spread until its fingertips, not only its pads, clear the part (curled fingertips
     # that reach past the pads land on a thin rim otherwise; teleop/pinch_tips.py)
     pinch_clear_tips: Bool = False
@@ -227,6 +232,8 @@ class GraspFields(CatalogModel):
         _only_with_grasp("pinch", "the fingers the thumb's pad closes against"))
     _flat_pinch_only = field_validator("grasp_squeeze_m", mode="before")(
         _only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
+    _flat_pinch_tips_height = field_validator("grasp_tips_height_m", mode="before")(
+        _only_with_grasp("flat_pinch", "where a flat pinch's closed tips end on the part"))
     _pad_pinch_clear_tips = field_validator("pinch_clear_tips", mode="before")(
         _only_with_grasp("pinch", "a pad pinch's pre-shape spread until its fingertips clear the part"))
 
@@ -248,7 +255,7 @@ class GraspFields(CatalogModel):
 
 class PickStep(PlanStep, GraspFields):
     """{hand, pick, place, [place_offset], [place_from], [grasp], [approach_pitch_deg], [grasp_yaw],
-    [grasp_point], [grasp_squeeze_m], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
+    [grasp_point], [grasp_squeeze_m], [grasp_tips_height_m], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
     or `table` with place_offset the spot on the table top). place_from: front slides it in level through the side a
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
@@ -256,7 +263,8 @@ class PickStep(PlanStep, GraspFields):
     (default the hand's own set, teleop/pinch_grasp.py), pinch_clear_tips: true spreads it until the fingertips,
     not only the pads, clear the part (a thin rim: teleop/pinch_tips.py); grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
     its centre or of grasp_point (a spatula's handle clear of its blade), grasp_squeeze_m (metres) aiming its
-    closed tips that far past each other for a firmer hold (a heavy tool); grasp: side is the palm grasp
+    closed tips that far past each other for a firmer hold (a heavy tool), grasp_tips_height_m (metres) bringing
+    the hand down so its closed tips end that high over the object's bottom (half a handle's height); grasp: side is the palm grasp
     from the side, thumb up, around an upright part (a drill's grip under its motor, a bottle), turned
     grasp_roll_deg about the fingers (default 90: thumb up). place_axis [x, y, z] (object frame) is turned
     on the way to point straight down and lowered that end first (a marker stood up in a pen cup; place_offset's

@@ -20,7 +20,7 @@ import numpy as np
 from sim.demo_plan import GRASP_YAW_ACROSS, SIDE_GRASP, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.reach import PALM_DOWN
-from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, width_along
+from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, tips_over_lowest, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape, thumb_actuators
@@ -129,7 +129,12 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
                             data.xpos[body] + at)
         touch, centre = tip_preshape(hand, side["open"], close, width)
     ready, _ = tip_preshape(hand, side["open"], close, width + PINCH_SPREAD_MARGIN_M)
-    bottom = float(bounding_box_points(op.scene.model, data, body)[:, 2].min()) - FLAT_PINCH_PRESS_M
+    press = FLAT_PINCH_PRESS_M
+    if item.get("grasp_tips_height_m") is not None:
+        # the closed tips end that high on the part (half a handle's height), never pressed deeper than by default:
+        # pressed 8 mm, a linkage finger (one actuator, the tip the lowest point) stuck on the table and did not close
+        press = min(press, tips_over_lowest(hand, item["hand"], close, hand_rot) - float(item["grasp_tips_height_m"]))
+    bottom = float(bounding_box_points(op.scene.model, data, body)[:, 2].min()) - press
     shapes = [ready + k / FLAT_PINCH_STAGES * (close - ready) for k in range(FLAT_PINCH_STAGES + 1)]
     below = [float(-(hand_outline(hand, item["hand"], q) @ hand_rot.T)[:, 2].min()) for q in shapes]
     obj_z = op.object_pos(data, name)[2]
