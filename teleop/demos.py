@@ -41,7 +41,9 @@ def raw_filename(episode_id: str) -> str:
 
 def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Path,
                           max_steps: int | None = None, first_index: int = 0, progress=None,
-                          operator: str = DEFAULT_OPERATOR) -> list[RecordedEpisode]:
+                          operator: str = DEFAULT_OPERATOR, allow_draft: bool = False) -> list[RecordedEpisode]:
+    """Scripted demonstrations first_index.. of the task on the embodiment, written to ``out_dir``. A draft
+    plan (`demo_plan_draft: true`, no stable success yet) is refused unless ``allow_draft`` (the bench)."""
     if operator not in OPERATORS:
         raise ValueError(f"operator: expected one of {list(OPERATORS)}, got {operator!r}")
     validate_name("task", task)
@@ -50,6 +52,9 @@ def record_demonstrations(task: str, embodiment: str, episodes: int, out_dir: Pa
     if not spec.demo_plan:     # fail once, before any scene is built, rather than record idle episodes
         raise SpecError(spec.source, "demo_plan", "a pick-and-place plan for the scripted operator",
                         "none: this task has no scripted demonstration yet")
+    if spec.demo_plan_draft and not allow_draft:    # demonstrations that fail do not belong in the data
+        raise SpecError(spec.source, "demo_plan_draft", "a finished plan (a draft runs only in `b2d bench demos "
+                        "--setting KEY`)", "true: the plan does not reach stable success yet")
     results = []
     for i in range(first_index, first_index + episodes):
         episode_id = f"{i:04d}"

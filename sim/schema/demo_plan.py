@@ -47,6 +47,7 @@ VIA_TIMES_RANGE = (1, 10)
 PRESS_RANGE_M = (0.0, 0.03)      # place_press_m: a flat pinch's object set down up to 3 cm below its release height
 SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed past each other, up to 5 cm
 TIPS_HEIGHT_RANGE_M = (0.0, 0.03)   # grasp_tips_height_m: a flat pinch's closed tips up to 3 cm over the object's bottom
+CARRY_RANGE_S = (0.0, 10.0)     # carry_s: a pick's carry, above 0 and at most 10 s
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -275,9 +276,12 @@ class PickStep(PlanStep, GraspFields):
     hold: true keeps it in the hand over `place` (dz: its bottom above the table) for the hand's next pick
     of it (teleop/plan_steps/via.py). With grasp: flat_pinch, release_pinch_only: true lets go opening only the
     thumb and the pinching fingers (the folded ones stay), place_press_m (metres) sets it down that far below
-    its release height, and release_relax (a fraction) opens the thumb and the pinching fingers from where they
-    hold that far towards the open hand (teleop/plan_steps/flat_place.py). close_thumb_last: true closes a power
-    grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed into the fingers' wall)."""
+    its release height, release_relax (a fraction) opens the thumb and the pinching fingers from where they
+    hold that far towards the open hand, and place_yaw (degrees, world) picks, of the turns that set the object
+    square to its target, the one with the tips closing (thumb to fingers) along it (teleop/plan_steps/flat_place.py).
+    carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s). close_thumb_last:
+    true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
+    into the fingers' wall)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -303,6 +307,11 @@ class PickStep(PlanStep, GraspFields):
     release_relax: Number = Field(None, gt=0.0, le=1.0, description="a fraction in (0, 1]")
     # palm grasp: the thumb closes after the fingers, whatever the hand file's `late` (plan_steps/pick_place.py)
     close_thumb_last: Bool = False
+    # seconds the carry from the lift to above the place takes (default 1 s): a long reach, turning as it goes
+    carry_s: Number = Field(None, gt=0.0, le=CARRY_RANGE_S[1], description=f"seconds in (0, {CARRY_RANGE_S[1]:g}]")
+    # flat pinch: of the turns that set the object square to its target, the one with the tips closing (thumb to
+    # fingers) nearest this direction (degrees, world, from +x): the tips on the piece's free sides, off the target
+    place_yaw: Number = Field(None, ge=-180.0, le=180.0, description="degrees in [-180, 180]")
 
     @field_validator("hold", mode="before")
     @classmethod
@@ -330,7 +339,8 @@ class PickStep(PlanStep, GraspFields):
     _side_only = field_validator("grasp_roll_deg", mode="before")(_side_grasp_roll)
     _power_only = field_validator("close_thumb_last", mode="before")(
         _only_with_grasp("power", "the order a palm grasp closes in"))
-    _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", mode="before")(
+    _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", "place_yaw",
+                                       mode="before")(
         _only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
 
     @field_validator("place", mode="before")
@@ -339,6 +349,13 @@ class PickStep(PlanStep, GraspFields):
         if info.data.get("place_from") == PLACE_FROM_FRONT:
             return _front_container(place, info)
         return _object(place, info, extra=(TABLE_TARGET,))
+
+    @field_validator("place_yaw", mode="after")
+    @classmethod
+    def _squared_to_an_object(cls, yaw, info: ValidationInfo):
+        if info.data.get("place") == TABLE_TARGET:
+            raise ValueError(f"no place_yaw with place: {TABLE_TARGET} (set down as it is held, not squared to anything)")
+        return yaw
 
     @field_validator("place_tilt_deg", mode="before")
     @classmethod

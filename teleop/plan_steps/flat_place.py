@@ -22,7 +22,11 @@ the fingers apart only as far as they came in, slides the thumb off its side and
   lifted it with the hand); `place_press_m` lowers the object that far below its release height instead of
   PRESS_M (a piece held tilted, one edge on a fingertip, lies flatter before the hand opens);
   `release_relax: f` opens the thumb and the pinching fingers from where they hold, f of the way to the
-  open hand (read as the hand is about to open), instead of to the pre-shape (relaxed_release).
+  open hand (read as the hand is about to open), instead of to the pre-shape (relaxed_release);
+  `place_yaw` (degrees) picks, of the turns that set the object square, the one with the tips closing (thumb
+  to fingers) nearest that direction rather than the smallest (turn_toward): a jigsaw piece set against the
+  near side of the fixed one, turned the least, came down with the fingertips on the fixed piece, which held
+  it 1.7 cm up as the hand opened (jigsaw's yellow piece, left hand: place_yaw 0 lays it flat).
 
 jigsaw_puzzle_assembly__iiwa7_sharpa, stream path, seeds 0-11, green and red pieces set 8 mm clear
 of the white one: 10 and 8 of 12 within the task's tolerance once let go (tests/teleop/test_flat_place.py).
@@ -60,6 +64,14 @@ def square_turn(obj_rot: np.ndarray, target_rot: np.ndarray, half_extents) -> fl
     period = np.pi / 2 if abs(hx - hy) < SQUARE_TOL_M else np.pi
     turn = _yaw(target_rot) - _yaw(obj_rot)
     return float((turn + period / 2) % period - period / 2)
+
+
+def turn_toward(turn: float, period: float, heading: float, place_yaw: float) -> float:
+    """Of the turns that set an object square (``turn`` plus whole ``period``s, within a half turn either
+    way), the one that brings the hand's ``heading`` (the yaw of its thumb-to-fingers axis, radians)
+    nearest ``place_yaw``."""
+    turns = [turn + k * period for k in range(-4, 5) if abs(turn + k * period) <= np.pi + 1e-9]
+    return min(turns, key=lambda t: abs((heading + t - place_yaw + np.pi) % (2 * np.pi) - np.pi))
 
 
 def relaxed_release(side: dict, frames: slice, folded: np.ndarray, fraction: float):
@@ -105,8 +117,8 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         opened.hand = np.where(tip_pinch(side["hand"]).moving, opened.hand, tl.frames[lower_frame].hand)
     # slide the thumb off the object's side before lifting the hand away
     retreat = tl.frames.pop()
-    axis = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand)
-    axis = _mat(opened.quat) @ (mirror_vec(axis) if item["hand"] == "left" else axis)
+    axis_site = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand)
+    axis = _mat(opened.quat) @ (mirror_vec(axis_site) if item["hand"] == "left" else axis_site)
     away = -np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
     tl.add(EASE_STEPS, pos=opened.pos + EASE_M * away + EASE_UP_M * UP)
     tl.add(retreat.end_step - opened.end_step, pos=retreat.pos + EASE_M * away)
@@ -126,7 +138,15 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         if item["place"] == TABLE_TARGET:
             return 0.0
         target = now.xmat[op.scene.object_body_ids[item["place"]]].reshape(3, 3)
-        return square_turn(now.xmat[body].reshape(3, 3), target, obj.half_extents)
+        turn = square_turn(now.xmat[body].reshape(3, 3), target, obj.half_extents)
+        if item.get("place_yaw") is None:
+            return turn
+        # `place_yaw`: of the square turns, the one that sets the tips closing along it (a piece set against
+        # another's side: the tips on its free sides, not between the two, where they landed on the other piece)
+        closing = _mat(tl.frames[lower_frame].quat) @ (mirror_vec(axis_site) if item["hand"] == "left" else axis_site)
+        hx, hy = float(obj.half_extents[0]), float(obj.half_extents[1])
+        period = np.pi / 2 if abs(hx - hy) < SQUARE_TOL_M else np.pi
+        return turn_toward(turn, period, float(np.arctan2(closing[1], closing[0])), np.radians(item["place_yaw"]))
 
     def set_off(now: mujoco.MjData) -> None:
         if op.object_pos(now, name)[2] < start_z + LIFTED_M:

@@ -19,6 +19,7 @@ import numpy as np
 
 from sim.demo_plan import GRASP_YAW_ACROSS, SIDE_GRASP, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
+from sim.physics import CONTROL_HZ
 from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, tips_over_lowest, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
@@ -365,6 +366,14 @@ def carry_height(op: PlanningOperator, data: mujoco.MjData, item: dict, name: st
     return float(top + CARRY_CLEARANCE_M + task.objects[name].half_extents[2] - offset[2])
 
 
+def carry_steps(item: dict) -> int:
+    """Control steps of a pick's carry, from the lift to above its place: `carry_s` seconds, else
+    DURATIONS["carry"]. A long reach, the hand turning as it goes, takes a person longer; at the
+    default second the IIWA7's wrist lagged its plan by up to 0.9 rad carrying a jigsaw piece to the
+    far side of the table, and the piece swung out of the fingertips."""
+    return DURATIONS["carry"] if item.get("carry_s") is None else max(1, round(float(item["carry_s"]) * CONTROL_HZ))
+
+
 def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> None:
     """The held object ``name`` (its centre ``offset`` from the wrist) carried from where the hand is to
     the step's `place` at `place_offset`: up over the place's rim, across (over anything in the way),
@@ -377,7 +386,7 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
     place = place_centre(op, data, item, name) - offset
     op.leaves(name, rest_centre(place + offset), on=item["place"])
     carry_frame = len(tl.frames)
-    op.set_off(side, data, item, DURATIONS["carry"], pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
+    op.set_off(side, data, item, carry_steps(item), pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
     lower_frame = len(tl.frames)
     out = None
     if side_roll(item):     # the way the hand came in, back out: along its palm's normal

@@ -73,13 +73,16 @@ def test_cells_in_two_processes_are_the_cells_in_one():
     assert without_time(two) == without_time(one) and two["table"] == one["table"]
 
 
-def test_a_bad_cell_reports_its_error_and_the_bench_lists_tasks_without_a_plan():
-    unplanned = next(t for t in names("tasks") if not load_task(t).demo_plan)
-    cell = run_cell(unplanned, OTHER, seeds=2, max_steps=2, dry_run=False)
+def test_a_bad_cell_reports_its_error_and_a_named_draft_plan_runs():
+    """A cell whose episodes fail (no control step to write) reports each seed's error; the bench goes on.
+    A draft plan (jigsaw_puzzle_assembly's) runs when its task is named, and is left out of 'all'."""
+    draft = "jigsaw_puzzle_assembly"
+    assert load_task(draft).demo_plan_draft and draft not in recordable_tasks()
+    cell = run_cell(draft, OTHER, seeds=2, max_steps=0, dry_run=False)
     assert cell["seeds"] == 2 and cell["successes"] == 0 and len(cell["errors"]) == 2
-    assert all("demo_plan" in e for e in cell["errors"])
-    result = run_cross_embodiment_bench([unplanned], [OTHER], seeds=1, max_steps=2)
-    assert result["without_plan"] == [unplanned] and result["cells"] == []
+    assert all("at least one control step" in e for e in cell["errors"])
+    result = run_cross_embodiment_bench([draft], [OTHER], seeds=1, max_steps=2)
+    assert result["without_plan"] == [] and len(result["cells"]) == 1 and not result["cells"][0]["errors"]
 
 
 def test_plan_dry_run_follows_the_paper_embodiments_path():
