@@ -123,12 +123,13 @@ def tip_axis(hand_name: str, q: np.ndarray) -> np.ndarray:
     return axis / np.linalg.norm(axis)
 
 
-def tips_over_lowest(hand_name: str, side: str, q: np.ndarray, R: np.ndarray) -> float:
-    """How high the thumb's and the pinching fingers' lowest tip is over the hand's lowest point at
-    actuator targets ``q``, the hand turned ``R`` (world from wrist site)."""
+def tips_over_lowest(hand_name: str, side: str, q: np.ndarray, R: np.ndarray, outline_q: np.ndarray | None = None) -> float:
+    """How high the thumb's and the pinching fingers' lowest tip at actuator targets ``q`` is over the hand's
+    lowest point at ``outline_q`` (default ``q``), the hand turned ``R`` (world from wrist site)."""
     tips = tip_points(hand_name, tip_pinch(hand_name).fingers, q)
     tips = tips @ M if side == "left" else tips
-    return float((tips @ R.T)[:, 2].min() - (hand_outline(hand_name, side, q) @ R.T)[:, 2].min())
+    lowest = hand_outline(hand_name, side, q if outline_q is None else outline_q)
+    return float((tips @ R.T)[:, 2].min() - (lowest @ R.T)[:, 2].min())
 
 
 def _turned(pitch_deg: float, roll_deg: float) -> np.ndarray:

@@ -130,11 +130,14 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
                             data.xpos[body] + at)
         touch, centre = tip_preshape(hand, side["open"], close, width)
     ready, _ = tip_preshape(hand, side["open"], close, width + PINCH_SPREAD_MARGIN_M)
+    # the last stage presses the tips past each other with grasp_squeeze_m (the wrist as planned for `close`)
+    last = np.clip(squeezed(hand, close, ready, item["grasp_squeeze_m"]), lo, hi) if item.get("grasp_squeeze_m") else close
     press = FLAT_PINCH_PRESS_M
     if item.get("grasp_tips_height_m") is not None:
-        # the closed tips end that high on the part (half a handle's height), never pressed deeper than by default:
-        # pressed 8 mm, a linkage finger (one actuator, the tip the lowest point) stuck on the table and did not close
-        press = min(press, tips_over_lowest(hand, item["hand"], close, hand_rot) - float(item["grasp_tips_height_m"]))
+        # the last stage's tips end that high on the part (half a handle's height), never pressed deeper than by
+        # default: pressed 8 mm, a linkage finger (one actuator, the tip the lowest point) stuck on the table and
+        # did not close; squeezed tips curl 3-5 mm higher than `close`'s
+        press = min(press, tips_over_lowest(hand, item["hand"], last, hand_rot, close) - float(item["grasp_tips_height_m"]))
     bottom = float(bounding_box_points(op.scene.model, data, body)[:, 2].min()) - press
     shapes = [ready + k / FLAT_PINCH_STAGES * (close - ready) for k in range(FLAT_PINCH_STAGES + 1)]
     below = [float(-(hand_outline(hand, item["hand"], q) @ hand_rot.T)[:, 2].min()) for q in shapes]
@@ -142,8 +145,8 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     offset = np.array([*((hand_rot @ mirror(centre))[:2] - at[:2]), obj_z - (bottom + below[0])])
     per = (DURATIONS["close"] + DURATIONS["close_late"]) // FLAT_PINCH_STAGES
     closing = [(per, q, bottom + b) for q, b in zip(shapes[1:], below[1:])]
-    if item.get("grasp_squeeze_m"):     # the last stage presses the tips past each other (the wrist as planned)
-        closing[-1] = (per, np.clip(squeezed(hand, close, ready, item["grasp_squeeze_m"]), lo, hi), closing[-1][2])
+    if item.get("grasp_squeeze_m"):
+        closing[-1] = (per, last, closing[-1][2])
     return hand_rot, ready, offset, closing
 
 

@@ -65,3 +65,18 @@ def test_the_linkage_hand_lifts_the_spatula():
         data, op = home_and_plan(scene)
         heights[name] = rise_through_lift(scene, data, op, "spatula", hand="left")
     assert heights["asked"] > 0.08 and heights["default"] < 0.02
+
+
+def test_a_squeezed_pinch_ends_its_tips_at_the_height_asked():
+    """With grasp_squeeze_m the last stage curls the tips past each other, 3-5 mm higher than the unsqueezed
+    shape: the height asked is where the squeezed tips end (tool_box_loading's wrench head, 10 mm thick)."""
+    spec = load_task("tool_box_loading")
+    step = {"hand": "left", "pick": "wrench", "place": "box", "place_offset": [-0.1, -0.04], "grasp": "flat_pinch",
+            "grasp_point": [0.078, 0, 0], "grasp_squeeze_m": 0.02, "grasp_tips_height_m": 0.005}
+    scene = demonstration_scene(spec, "ur5_wuji")
+    data, op = home_and_plan(scene)
+    hand = op.sides["left"]["hand"]
+    hand_rot, _, _, closing = flat_pinch(op, data, step, "wrench")
+    tips = (tip_points(hand, tip_pinch(hand).fingers, closing[-1][1]) @ M) @ hand_rot.T
+    bottom = bounding_box_points(scene.model, data, scene.object_body_ids["wrench"])[:, 2].min()
+    assert closing[-1][2] + tips[:, 2].min() - bottom == pytest.approx(0.005, abs=1e-6)
