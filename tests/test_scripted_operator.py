@@ -75,8 +75,8 @@ def test_bad_place_offset_names_file_and_field(tmp_path, bad):
 
 
 def test_place_offset_dz_defaults_to_the_targets_top():
-    task = load_task("citrus_plate_loading")
-    assert place_offset(task.demo_plan[0]).tolist() == [0.065, -0.055, 0.0]
+    assert place_offset({"place_offset": [0.065, -0.055]}).tolist() == [0.065, -0.055, 0.0]
+    assert place_offset({"place_offset": [0.065, -0.07, 0.02]}).tolist() == [0.065, -0.07, 0.02]
 
 
 def _operator_with_lemon_at(offset_from_hand):
