@@ -23,3 +23,18 @@ def home_and_plan(scene, operator=None):
     operator = operator or ScriptedOperator()
     operator.reset(scene, data)
     return data, operator
+
+
+def looks_with_object_under_wrist(op, data, name: str, looks: tuple[str, ...], hand: str = "right",
+                                  below_m: float = 0.05) -> None:
+    """Run the operator's looks named ``looks`` (on_frame_end adjusts, e.g. "set_off") on ``data`` with
+    object ``name`` put ``below_m`` under ``hand``'s wrist, as if held there."""
+    import mujoco
+
+    side, model = op.sides[hand], op.scene.model
+    adr = model.jnt_qposadr[model.body_jntadr[op.scene.object_body_ids[name]]]
+    data.qpos[adr:adr + 3] = data.site_xpos[side["wrist_site_id"]] - [0.0, 0.0, below_m]
+    mujoco.mj_forward(model, data)
+    for _, adjust in side["looks"]:
+        if adjust.__name__ in looks:
+            adjust(data)

@@ -15,7 +15,7 @@ from sim.tasks import load_task
 from teleop.flat_pinch import tip_pinch
 from teleop.plan_steps.flat_place import PRESS_M
 from teleop.plan_steps.pick_place import flat_pinch
-from plan_runs import home_and_plan
+from plan_runs import home_and_plan, looks_with_object_under_wrist
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.02, -0.016],
@@ -67,15 +67,8 @@ def _lowered(step: dict) -> list:
     """The keyframes of a one-pick plan after the operator's two looks (setting off, starting down), the
     piece seen 5 cm under the wrist."""
     op, data = _op(step)
-    side = op.sides["right"]
-    model = op.scene.model
-    adr = model.jnt_qposadr[model.body_jntadr[op.scene.object_body_ids["green_piece"]]]
-    data.qpos[adr:adr + 3] = data.site_xpos[side["wrist_site_id"]] - [0.0, 0.0, 0.05]
-    mujoco.mj_forward(model, data)
-    for _, adjust in side["looks"]:
-        if adjust.__name__ in ("set_off", "lowering"):
-            adjust(data)
-    return side["timeline"].frames
+    looks_with_object_under_wrist(op, data, "green_piece", ("set_off", "lowering"))
+    return op.sides["right"]["timeline"].frames
 
 
 def test_place_press_m_sets_the_object_down_that_far_below_its_release_height():

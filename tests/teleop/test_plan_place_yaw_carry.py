@@ -4,7 +4,6 @@ tips closing along that direction: teleop/plan_steps/flat_place.py)."""
 
 import dataclasses
 
-import mujoco
 import numpy as np
 import pytest
 
@@ -16,7 +15,7 @@ from teleop.flat_pinch import tip_axis
 from teleop.operator_motion import DURATIONS
 from teleop.plan_steps.flat_place import _mat, turn_toward
 from teleop.plan_steps.pick_place import flat_pinch
-from plan_runs import home_and_plan
+from plan_runs import home_and_plan, looks_with_object_under_wrist
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.008, -0.016],
@@ -75,13 +74,7 @@ def _heading_after_set_off(step: dict) -> float:
     after the operator's look as the carry sets off (the piece seen 5 cm under the wrist, as it lies)."""
     op, data = _op(step)
     side = op.sides["right"]
-    model = op.scene.model
-    adr = model.jnt_qposadr[model.body_jntadr[op.scene.object_body_ids["green_piece"]]]
-    data.qpos[adr:adr + 3] = data.site_xpos[side["wrist_site_id"]] - [0.0, 0.0, 0.05]
-    mujoco.mj_forward(model, data)
-    for _, adjust in side["looks"]:
-        if adjust.__name__ == "set_off":
-            adjust(data)
+    looks_with_object_under_wrist(op, data, "green_piece", ("set_off",))
     ready = flat_pinch(op, data, op.scene.task.demo_plan[0], "green_piece")[1]
     lower = side["timeline"].frames[-5]
     axis = _mat(lower.quat) @ tip_axis("sharpa", ready)
