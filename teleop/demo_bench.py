@@ -54,11 +54,11 @@ def run_demo_bench(episodes: int = 4, only: list[str] | None = None, operator: s
                    processes: int = 1) -> dict:
     """Seeds 0..episodes-1 of every chosen paper setting with a plan, recorded in ``processes`` processes
     (the same episodes whatever the number: each seed is its own scene and operator)."""
-    chosen, recordable = settings_to_run(only)
-    units = [(s.task, s.embodiment, i, operator) for s in recordable for i in range(episodes)]
+    chosen, to_record = settings_to_run(only)
+    units = [(s.task, s.embodiment, i, operator) for s in to_record for i in range(episodes)]
     t0 = time.perf_counter()
     results = iter(map_in_processes(record_one, units, processes))
-    by_setting = {s.key: [next(results) for _ in range(episodes)] for s in recordable}
+    by_setting = {s.key: [next(results) for _ in range(episodes)] for s in to_record}
     wall = time.perf_counter() - t0
     rows, succeeded = [], 0
     for setting in chosen:

@@ -110,7 +110,6 @@ class TaskFile(CatalogModel):
     zones: dict[str, Zone] | None = Field(None, description="a mapping of zone name -> zone")
     points: dict[str, Point3] | None = Field(None, description="a mapping of point name -> [x, y, z]")
     demo_plan: Any = None              # sim/demo_plan.py
-    demo_plan_draft: bool = Field(False, description="true: the plan does not reach stable success yet; it is kept "
-                                  "to work on (`b2d bench demos --setting KEY` runs it), and the setting is not "
-                                  "recordable")
+    demo_plan_draft: Bool = Field(False, description="true or false (true: the plan does not reach stable success "
+                                  "yet; `b2d bench demos --setting KEY` runs it, the setting is not recordable)")
     metrics: dict = Field(description="a mapping: the metrics block")
