@@ -56,12 +56,17 @@ def _yaw(R: np.ndarray) -> float:
     return float(np.arctan2(R[1, 0], R[0, 0]))
 
 
+def footprint_period(half_extents) -> float:
+    """The turn (radians) that maps an object lying flat onto itself: a half turn; a quarter turn if square."""
+    hx, hy = float(half_extents[0]), float(half_extents[1])
+    return np.pi / 2 if abs(hx - hy) < SQUARE_TOL_M else np.pi
+
+
 def square_turn(obj_rot: np.ndarray, target_rot: np.ndarray, half_extents) -> float:
     """The smallest turn (radians, about the vertical) that sets an object lying flat (rotation
     ``obj_rot``) square to a target (``target_rot``): their sides parallel, up to the object's
-    footprint symmetry (a half turn; a quarter turn if square)."""
-    hx, hy = float(half_extents[0]), float(half_extents[1])
-    period = np.pi / 2 if abs(hx - hy) < SQUARE_TOL_M else np.pi
+    footprint symmetry (footprint_period)."""
+    period = footprint_period(half_extents)
     turn = _yaw(target_rot) - _yaw(obj_rot)
     return float((turn + period / 2) % period - period / 2)
 
@@ -117,8 +122,9 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         opened.hand = np.where(tip_pinch(side["hand"]).moving, opened.hand, tl.frames[lower_frame].hand)
     # slide the thumb off the object's side before lifting the hand away
     retreat = tl.frames.pop()
-    axis_site = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand)
-    axis = _mat(opened.quat) @ (mirror_vec(axis_site) if item["hand"] == "left" else axis_site)
+    axis_site = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand) ...
+    axis_site = mirror_vec(axis_site) if item["hand"] == "left" else axis_site     # ... this hand's
+    axis = _mat(opened.quat) @ axis_site
     away = -np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
     tl.add(EASE_STEPS, pos=opened.pos + EASE_M * away + EASE_UP_M * UP)
     tl.add(retreat.end_step - opened.end_step, pos=retreat.pos + EASE_M * away)
@@ -143,10 +149,9 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
             return turn
         # `place_yaw`: of the square turns, the one that sets the tips closing along it (a piece set against
         # another's side: the tips on its free sides, not between the two, where they landed on the other piece)
-        closing = _mat(tl.frames[lower_frame].quat) @ (mirror_vec(axis_site) if item["hand"] == "left" else axis_site)
-        hx, hy = float(obj.half_extents[0]), float(obj.half_extents[1])
-        period = np.pi / 2 if abs(hx - hy) < SQUARE_TOL_M else np.pi
-        return turn_toward(turn, period, float(np.arctan2(closing[1], closing[0])), np.radians(item["place_yaw"]))
+        closing = _mat(tl.frames[lower_frame].quat) @ axis_site
+        return turn_toward(turn, footprint_period(obj.half_extents), float(np.arctan2(closing[1], closing[0])),
+                           np.radians(item["place_yaw"]))
 
     def set_off(now: mujoco.MjData) -> None:
         if op.object_pos(now, name)[2] < start_z + LIFTED_M:
