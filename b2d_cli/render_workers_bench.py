@@ -67,3 +67,44 @@ def parallel_render_figures(replay_path: Path, profile, workers: int, out_dir: P
                  "over all processes' CPU; sharing_cpu_s: the CPU seconds sharing adds (each helper's scene and "
                  "renderer, passing frames)"),
     }
+
+
+def cold_start_figures(raw_path: Path, profile, workers: int, out_dir: Path, repeats: int = 3) -> dict:
+    """One recording replayed and rendered in a process whose helpers have not started, as one
+    `b2d replay RAW --workers N` or one executor step runs: one worker, against N workers two ways:
+    waiting for the helpers to start before rendering (the code before stop 34) and starting them as
+    the physics replay begins, the render taking them on once they are up (now). Wall-clock medians
+    over `repeats` rounds, each round in a rotated order."""
+    from episodes.render_pool import close_shared_helpers
+    from episodes.stages import replay_to_file, start_render_helpers
+
+    def run(way: str) -> Path:
+        replay, render = out_dir / f"cold_{way}.replay.h5", out_dir / f"cold_{way}.render.h5"
+        if way == "helpers_start_during_replay":
+            start_render_helpers(workers - 1, raw_path)
+        replay_to_file(raw_path, replay)
+        if way == "helpers_waited_for":
+            shared_helpers(workers - 1)
+        render_to_file(replay, profile, render, workers=1 if way == "one_worker" else workers)
+        return render
+
+    ways = ["one_worker", "helpers_waited_for", "helpers_start_during_replay"]
+    walls: dict[str, list[float]] = {w: [] for w in ways}
+    files: dict[str, str] = {}
+    for r in range(repeats):
+        for way in ways[r % 3:] + ways[:r % 3]:
+            close_shared_helpers()
+            t0 = time.perf_counter()
+            files[way] = file_sha256(run(way))
+            walls[way].append(round(time.perf_counter() - t0, 3))
+    close_shared_helpers()
+    wall = {w: statistics.median(v) for w, v in walls.items()}
+    return {
+        "workers": workers, "repeats": repeats, "wall_s_median": wall, "wall_s": walls,
+        "speedup_vs_one_worker": {w: round(wall["one_worker"] / wall[w], 3) for w in ways[1:]},
+        "now_vs_before": round(wall["helpers_waited_for"] / wall["helpers_start_during_replay"], 3),
+        "render_files_identical": len(set(files.values())) == 1,
+        "note": ("replay + render of one recording in a process without helpers (each run closes them first): "
+                 "what `b2d replay RAW --workers N` and an executor's render step pay; wall clock, so other "
+                 "processes' load counts"),
+    }

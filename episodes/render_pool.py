@@ -8,7 +8,9 @@ byte-identical to a one-worker render, and nothing is joined afterwards (joining
 and a writer per part; each worker's start-up ~3 CPU-seconds).
 
 Helpers are spawned once per process and kept across render calls, so their imports and GL start-up
-are paid once. Each call builds the episode's scene and renderer in every helper it uses: a scene
+are paid once. A render does not wait for them to start: it hands them its frames' counter at once and
+renders alone until they are ready, so a short render in a fresh process (an executor's step, one
+`b2d replay`) is never slower than one worker by their start-up (~1.5 CPU-seconds each). Each call builds the episode's scene and renderer in every helper it uses: a scene
 depends on the episode's scene sample (textures, lights, distractors, camera offsets), so there is
 nothing valid to keep between two episodes of one setting.
 
@@ -190,6 +192,10 @@ class RenderHelpers:
     def alive(self) -> bool:
         return not self._lost and all(p.is_alive() for p in self._procs)
 
+    def ready(self, k: int) -> bool:
+        """Whether helper `k` has said it started (imports, GL): one still starting takes no frames yet."""
+        return k in self.startup_cpu_s
+
     def wait_ready(self, timeout: float = 120.0) -> dict[int, float]:
         """Block until every helper has started (imports, GL); their start-up CPU seconds."""
         deadline = time.monotonic() + timeout
@@ -325,8 +331,12 @@ class _Job:
                     h._state[JOB] = 0       # the others stop too; what is missing is rendered here
         with h._lock:
             h._state[JOB] = 0       # a helper still building its scene skips the job
-        while self.open and not alone:  # their timings, for benchmarks (they end within a frame)
+        # their timings, for benchmarks (they end within a frame); one still starting took no frame and is
+        # not waited for: its late reply to this job is dropped as left over
+        self.open = {k for k in self.open if h.ready(k)}
+        while self.open and not alone:
             alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
+            self.open = {k for k in self.open if h.ready(k)}
 
 
 # ---------------------------------------------------------------- one set per process
@@ -335,10 +345,11 @@ _shared: RenderHelpers | None = None
 _shared_lock = threading.Lock()
 
 
-def shared_helpers(count: int) -> RenderHelpers:
+def shared_helpers(count: int, wait: bool = True) -> RenderHelpers:
     """This process's helpers (at least `count`), started on first use and kept until it exits; a
     set with a dead helper (killed, or its starting thread ended: the kernel then ends it) is
-    replaced."""
+    replaced. `wait`: block until new helpers have started (benchmarks time their start apart);
+    a render need not, its helpers join it when ready."""
     global _shared
     with _shared_lock:
         pool = _shared
@@ -351,7 +362,8 @@ def shared_helpers(count: int) -> RenderHelpers:
         if pool is None:
             pool = RenderHelpers(count)
             try:
-                pool.wait_ready()     # their imports and GL start-up, once: then every call finds them warm
+                if wait:
+                    pool.wait_ready()     # their imports and GL start-up, once: then every call finds them warm
             except BaseException:
                 pool.close()
                 raise

@@ -90,14 +90,8 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
     steps = frame_steps(num_steps, profile.rate_hz)[:max_frames]
     if not steps.size:
         raise ValueError(f"{replay_path}: no frames to render (max_frames={max_frames})")
-    helpers, pool = max(0, min(workers, len(steps) // MIN_FRAMES_PER_WORKER) - 1), None
-    if helpers:
-        from episodes.render_pool import shared_helpers
-
-        try:
-            pool = shared_helpers(helpers)
-        except (OSError, RuntimeError) as exc:      # slower, not wrong: the same bytes from this process alone
-            log.warning("%s: render helpers did not start (%s); rendering in this process alone", replay_path, exc)
+    helpers = max(0, min(workers, len(steps) // MIN_FRAMES_PER_WORKER) - 1)
+    pool = start_render_helpers(helpers, replay_path) if helpers else None
     if pool is not None:
         with pool.job(replay_path, profile, steps, helpers) as job:
             stats = _render_steps(replay_path, profile, steps, out_path, job)
@@ -110,6 +104,19 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
 
 
 MIN_FRAMES_PER_WORKER = 8    # below this, a helper's scene and renderer cost more than it saves
+
+
+def start_render_helpers(count: int, for_path: Path):
+    """This process's `count` render helpers (episodes/render_pool.py), started if need be and not
+    waited for: a render uses them once they are up. None if they cannot start: then the render runs
+    in this process alone, slower but the same bytes."""
+    from episodes.render_pool import shared_helpers
+
+    try:
+        return shared_helpers(count, wait=False)
+    except (OSError, RuntimeError) as exc:
+        log.warning("%s: render helpers did not start (%s); rendering in this process alone", for_path, exc)
+        return None
 
 
 def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, out_path: Path, job=None) -> dict:
@@ -280,6 +287,8 @@ def raw_to_episode(raw_path: Path, profile: SensorProfile, out_dir: Path, work_d
     clean_stale_temporaries(out_dir)
     replay_path = work / f"{stem}.replay.h5"
     render_path = work / f"{stem}.{profile.content_hash}.render.h5"
+    if workers > 1:
+        start_render_helpers(workers - 1, raw_path)     # they start up while the physics replays
     replay_to_file(raw_path, replay_path, drift_bound_m=drift_bound_m)
     render_to_file(replay_path, profile, render_path, max_frames=max_frames, workers=workers)
     assemble_episode(replay_path, render_path, profile, out_path)

@@ -36,6 +36,17 @@ def one_worker_sha(replay, tmp_path_factory):
     return file_sha256(out)
 
 
+def test_a_render_does_not_wait_for_helpers_to_start(replay, one_worker_sha, tmp_path):
+    # a fresh process's helpers need ~1.5 CPU-s to start (imports, GL); 18 tiny frames take far less, so
+    # the writer renders them all alone instead of waiting, and the file is the same
+    render_pool.close_shared_helpers()
+    info = render_to_file(replay, TINY, tmp_path / "cold.render.h5", workers=2)
+    pool = shared_helpers(1, wait=False)
+    assert not pool.ready(0) and info["helper_frames"] == 0 and info["workers"] == 1
+    assert file_sha256(tmp_path / "cold.render.h5") == one_worker_sha
+    assert pool.wait_ready() and pool.ready(0)     # it went on starting, for the next render
+
+
 class _WaitingForHelpers(ReplayFrames):
     """The writer's own renderer, held at its first frame until a helper has taken frames: tiny frames
     render faster than a helper builds its scene, and the test must see helper-made frames written."""
@@ -56,7 +67,7 @@ def test_frames_from_helpers_give_the_one_worker_file_byte_for_byte(replay, one_
 
 
 def test_helpers_are_kept_across_calls_one_killed_mid_render_changes_no_byte_and_is_replaced(
-        replay, one_worker_sha, tmp_path):
+        replay, one_worker_sha, tmp_path, monkeypatch):
     render_to_file(replay, TINY, tmp_path / "a.render.h5", workers=2)
     pool = shared_helpers(1)
     pid = pool._procs[0].pid
@@ -70,9 +81,12 @@ def test_helpers_are_kept_across_calls_one_killed_mid_render_changes_no_byte_and
         os.kill(pid, signal.SIGKILL)      # some of its frames may be sent, some lost
         stats = stages._render_steps(replay, TINY, steps, tmp_path / "c.render.h5", job)
     assert stats["helper_frames"] == 0 and not pool.alive()
-    info = render_to_file(replay, TINY, tmp_path / "d.render.h5", workers=2)
-    assert shared_helpers(1) is not pool and info["workers"] == 2
-    assert {file_sha256(tmp_path / f"{n}.render.h5") for n in "abcd"} == {one_worker_sha}
+    render_to_file(replay, TINY, tmp_path / "d.render.h5", workers=2)     # starts a replacement
+    assert shared_helpers(1) is not pool
+    monkeypatch.setattr(stages, "ReplayFrames", _WaitingForHelpers)
+    info = render_to_file(replay, TINY, tmp_path / "e.render.h5", workers=2)     # which takes part once up
+    assert info["workers"] == 2
+    assert {file_sha256(tmp_path / f"{n}.render.h5") for n in "abcde"} == {one_worker_sha}
 
 
 def test_the_dagster_render_fan_out_with_two_render_workers_writes_the_one_worker_file(raw_path, one_worker_sha,
