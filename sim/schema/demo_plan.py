@@ -48,6 +48,7 @@ PRESS_RANGE_M = (0.0, 0.03)      # place_press_m: a flat pinch's object set down
 SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed past each other, up to 5 cm
 TIPS_HEIGHT_RANGE_M = (0.0, 0.03)   # grasp_tips_height_m: a flat pinch's closed tips up to 3 cm over the object's bottom
 CARRY_RANGE_S = (0.0, 10.0)     # carry_s: a pick's carry, above 0 and at most 10 s
+TOE_IN_RANGE_DEG = (0.0, 30.0)  # toe_in_deg: a carry's fingers turned in towards the object, level .. 30 degrees
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -565,12 +566,13 @@ class StrikeStep(PlanStep, GraspFields):
 
 
 class CarryStep(PlanStep):
-    """{hand: both, carry, place, [place_from], [place_offset], [grasp_height], [return_home], [after],
-    [wait_s]}: both palms squeeze the object from opposite sides and carry it onto/into `place`
+    """{hand: both, carry, place, [place_from], [place_offset], [grasp_height], [toe_in_deg], [return_home],
+    [after], [wait_s]}: both palms squeeze the object from opposite sides and carry it onto/into `place`
     (place_from and place_offset as for pick: with place_from: front it is slid in level through the
     side a container is open at, a bowl into a microwave); grasp_height (metres from its centre, within
-    its half height) is where the palms press; return_home: true sends both hands back to their home
-    pose after letting go."""
+    its half height) is where the palms press; toe_in_deg (default 10) how far each hand's fingers turn in
+    towards the object about the vertical, which swings the forearms apart behind it; return_home: true
+    sends both hands back to their home pose after letting go."""
 
     hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
 
@@ -579,6 +581,10 @@ class CarryStep(PlanStep):
     place: Name
     place_offset: PlaceOffset = None
     grasp_height: Number = 0.0
+    # the fingers turned in this far (degrees; default teleop/plan_steps/carry.py TOE_IN_DEG): the wrists
+    # behind the palms further apart (two UR5 wrists met behind the cleaner at 10)
+    toe_in_deg: Number = Field(None, ge=TOE_IN_RANGE_DEG[0], le=TOE_IN_RANGE_DEG[1],
+                               description=f"degrees in [{TOE_IN_RANGE_DEG[0]:g}, {TOE_IN_RANGE_DEG[1]:g}]")
     return_home: Bool = False
 
     @field_validator("place", mode="before")

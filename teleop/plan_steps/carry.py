@@ -40,7 +40,7 @@ PALM_ROLL_DEG = 90.0          # palm down rolled about the fingers: the right pa
 # wrist over the other's. Pitching both lifted both wrists to the same height, where they met.
 FINGERS_DOWN_DEG = {"right": 30.0, "left": 0.0}
 PITCH_STEP_DEG = 5.0          # ... less in steps of this, where the fingertips would reach below the object's bottom
-TOE_IN_DEG = 10.0             # fingers turned in towards the object, as a person's: the forearms swing out
+TOE_IN_DEG = 10.0             # fingers turned in towards the object, as a person's: the forearms swing out (toe_in_deg)
 SPREAD_M = 0.015              # each palm this far off its face while coming down and after letting go
 SQUEEZE_M = 0.012            # each palm aimed this far inside its face: the arms' servos press it in
 # The knuckle row this far short of the far face: set further forward, the wrist behind the palm meets
@@ -89,17 +89,19 @@ def across_opening(model: mujoco.MjModel, data: mujoco.MjData, body: int,
     return a, width_along(model, data, body, a) / 2, width_along(model, data, body, out) / 2
 
 
-def hand_rotation(side: str, a: np.ndarray, pitch_deg: float | None = None) -> np.ndarray:
+def hand_rotation(side: str, a: np.ndarray, pitch_deg: float | None = None,
+                  toe_in_deg: float = TOE_IN_DEG) -> np.ndarray:
     """Palm facing the object along the across axis ``a`` (the right palm -a, the left +a), fingers
     pointing away from the body (pitched down ``pitch_deg``, default FINGERS_DOWN_DEG, turned in
-    TOE_IN_DEG), thumb up."""
+    ``toe_in_deg``), thumb up."""
     pitch = FINGERS_DOWN_DEG[side] if pitch_deg is None else pitch_deg
     rolled = axis_rotation(FORWARD, np.radians(PALM_ROLL_DEG * SIDE_SIGN[side])) @ PALM_DOWN
     pitched = axis_rotation(np.array([1.0, 0.0, 0.0]), -np.radians(pitch)) @ rolled
-    return yawed(pitched, float(np.arctan2(a[1], a[0])) + SIDE_SIGN[side] * np.radians(TOE_IN_DEG))
+    return yawed(pitched, float(np.arctan2(a[1], a[0])) + SIDE_SIGN[side] * np.radians(toe_in_deg))
 
 
-def fingers_pitch(op: PlanningOperator, side: str, a: np.ndarray, above_bottom: float) -> float:
+def fingers_pitch(op: PlanningOperator, side: str, a: np.ndarray, above_bottom: float,
+                  toe_in_deg: float = TOE_IN_DEG) -> float:
     """FINGERS_DOWN_DEG for ``side``, less (in PITCH_STEP_DEG steps, down to level) while the open hand's
     lowest point would be below the object's bottom, ``above_bottom`` under the wrist site: the
     fingertips of a hand pressing on a low object (a bowl) would meet what it stands on, the table or
@@ -107,7 +109,7 @@ def fingers_pitch(op: PlanningOperator, side: str, a: np.ndarray, above_bottom: 
     s = op.sides[side]
     outline = hand_outline(s["hand"], side, s["open"])
     for pitch in np.arange(FINGERS_DOWN_DEG[side], 0.0, -PITCH_STEP_DEG):
-        if float((outline @ hand_rotation(side, a, pitch).T)[:, 2].min()) >= -above_bottom:
+        if float((outline @ hand_rotation(side, a, pitch, toe_in_deg).T)[:, 2].min()) >= -above_bottom:
             return float(pitch)
     return 0.0
 
@@ -138,13 +140,14 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     box = bounding_box_points(op.scene.model, data, op.scene.object_body_ids[name])[:, 2]
     bottom, top = float(centre[2] - box.min()), float(box.max() - centre[2])
     height = float(item.get("grasp_height", 0.0))
+    toe_in = TOE_IN_DEG if item.get("toe_in_deg") is None else float(item["toe_in_deg"])
     for side_name in ("right", "left"):
         out = SIDE_SIGN[side_name] * a
         # the palm's centre on the across face, the knuckles just short of the far face
-        pitch_deg = fingers_pitch(op, side_name, a, height + bottom)
+        pitch_deg = fingers_pitch(op, side_name, a, height + bottom, toe_in)
         pitch = np.radians(pitch_deg)
         contact = centre + height * UP + (depth - KNUCKLE_SHORT_M - knuckles * np.cos(pitch)) * f
-        holds[side_name] = (out, hand_rotation(side_name, a, pitch_deg), contact + out * (across - SQUEEZE_M),
+        holds[side_name] = (out, hand_rotation(side_name, a, pitch_deg, toe_in), contact + out * (across - SQUEEZE_M),
                             contact + out * (across + SPREAD_M))
     if front:
         back, slide = front_path(op, data, name, holds, centre, place, way_in)

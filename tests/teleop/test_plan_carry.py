@@ -37,6 +37,8 @@ def _check(steps):
     ({"grasp_height": 0.3}, "grasp_height"),     # above the cleaner's top
     ({"grasp_height": "high"}, "grasp_height"),
     ({"squeeze": 0.01}, "squeeze"),
+    ({"toe_in_deg": 45}, "toe_in_deg"),          # past 30 degrees
+    ({"toe_in_deg": -5}, "toe_in_deg"),
 ])
 def test_check_refuses_bad_fields(fields, field):
     with pytest.raises(SpecError, match=rf"demo_plan\[0\]\.{field}"):
@@ -96,3 +98,23 @@ def test_both_hands_carry_the_cleaner_into_the_box():
         latched = latched or bool(record.stage_latched[0])
     assert lifted > 0.1               # one LEAP hand never lifted it
     assert latched                    # inside the box and upright (cleaner_in)
+
+
+def _fingers_in_deg(frame, side: str) -> float:
+    """How far a squeezing hand's fingers (the wrist site's z) turn from +y towards the object."""
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, frame.quat)
+    fingers = R.reshape(3, 3)[:, 2]
+    return float(np.degrees(np.arctan2(-fingers[0] if side == "right" else fingers[0], fingers[1])))
+
+
+def test_toe_in_turns_the_fingers_in_and_the_wrists_apart():
+    turned = {}
+    for toe_in in (None, 20.0):
+        _, _, op = _operator([STEP if toe_in is None else {**STEP, "toe_in_deg": toe_in}])
+        turned[toe_in] = {s: op.sides[s]["timeline"].frames[-10] for s in ("right", "left")}   # squeezed
+    for side in ("right", "left"):     # 10 degrees more than TOE_IN_DEG (seen from above: the right's pitched)
+        more = _fingers_in_deg(turned[20.0][side], side) - _fingers_in_deg(turned[None][side], side)
+        assert 9.0 < more < 13.0
+        # the palm itself is where it was: only the hand behind it turns
+        assert np.allclose(turned[20.0][side].pos, turned[None][side].pos, atol=0.005)
