@@ -488,13 +488,14 @@ class PourStep(PlanStep, GraspFields):
 
 
 class TurnStep(PlanStep):
-    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [return_home], [approach_over], [after],
-    [wait_s]}: swing a
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [speed], [return_home], [approach_over],
+    [withdraw_past_end], [after], [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
     on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
     speed (m/s) is how fast the hand's contact moves along the arc (default 0.09); return_home: false leaves
     the hand risen off the link where it let go, so the next step sets off from there; approach_over: true
-    brings the hand to the link from above its top."""
+    brings the hand to the link from above its top; withdraw_past_end: true takes the hand, once it lets go,
+    out along the link past its free end before it goes on (round that end, not over the link)."""
 
     turn: Name
     to: Number
@@ -507,6 +508,9 @@ class TurnStep(PlanStep):
     # true: the hand comes to the link from above its top (a door pulled open past square, shut again from its
     # outer side: the hand rises over it rather than through it)
     approach_over: Bool = False
+    # true: after letting go the hand moves out along the link past its free end, and goes on from there round
+    # that end rather than rising over the link (the arm behind a hand outside a tall door lies across its top)
+    withdraw_past_end: Bool = False
 
     @field_validator("turn", mode="before")
     @classmethod

@@ -18,6 +18,8 @@ pulled by its handle, a bar standing off its face: the fingers come down along t
 the gap behind the bar and the pads draw it round; shutting it again from in front, the fingers come
 down in front of the bar the same way and push it back. With `palm_from` (opt-in) the fingers lie
 along the hinge all the way and from that angle on the flat palm pushes (teleop/plan_steps/palm_push.py).
+With `withdraw_past_end` (opt-in) the hand, once it lets go, moves level out along the link past its free end
+and goes on from there, rather than rising over the link (the arm behind it would lie across a tall door's top).
 """
 
 from __future__ import annotations
@@ -166,7 +168,16 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     # the link and what it is on
     pos = pos - APPROACH_HEIGHT_M * (R[:, 1] if palm_turns(arc[-1], palm_from, way) else R[:, 2])
     tl.add(DURATIONS["retreat"], pos=pos)
-    tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
+    if item.get("withdraw_past_end", False):
+        # opt-in: out along the link, level, until the whole hand is past its free end, and home from there round
+        # that end: a hand rising over a tall door it pulled open leaves the arm behind it across the door's top
+        # (the way home then shoved the door back)
+        out = link.radial(link.rotated(faces[radii[-1]], arc[-1] - start))
+        inner = float(np.min(hand_outline(side["hand"], item["hand"], side["open"]) @ R.T @ out))
+        beyond = link.reach() + CLEARANCE_M - float(link.radial_vec(pos) @ out) - inner
+        tl.add(DURATIONS["lift"], pos=pos + max(0.0, beyond) * out)
+    else:
+        tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
     # back to where the hand rests: the arm leaves the pose it stretched into around the link; unless
     # `return_home: false`: the hand waits where it rose off the link, and its next step sets off from there
     op.link_angles[item["turn"]] = link.rest_angle(target)
@@ -225,6 +236,10 @@ class Hinge:
         # the pushed face looks against the push: the hand should be on that side of the edge
         self.handle = max(edges, key=lambda e: float(-way * self.tangent(e) @ (hand - e)))
         self.handle_radius = float(np.linalg.norm(self.radial_vec(self.handle)))
+
+    def reach(self) -> float:
+        """How far the link reaches from its hinge axis (its farthest corner)."""
+        return max(float(np.linalg.norm(self.radial_vec(c))) for g in self.geoms for c in self._corners(g))
 
     def top(self, angle: float) -> float:
         """The link's highest point (world z) at joint ``angle``."""

@@ -22,6 +22,7 @@ STEP = {"hand": "right", "pick": "lemon", "place": "fridge", "place_from": "fron
 
 def _planned(tmp_path):
     raw = yaml.safe_load(load_task(TASK).source.read_text())
+    raw["objects"]["fridge"]["parts"][1]["pos"] = [0.0, 0.008, 0.0]     # the shelf across the cavity's middle
     raw["demo_plan"] = [STEP]
     task = parse_task(raw, tmp_path / "fridge.yaml")
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))

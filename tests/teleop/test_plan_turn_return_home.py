@@ -74,9 +74,13 @@ def _fridge(tmp_path, **fields):
     raw = yaml.safe_load(load_task(FRIDGE).source.read_text())
     fridge = raw["objects"]["fridge"]
     fridge["pose"] = {"xy": [0.0, 0.21]}
+    fridge["parts"] = [{"open_box": {"size": [0.22, 0.17, 0.25], "wall": 0.015, "open": "-y"}},   # 44 cm wide
+                       {"shape": "box", "size": [0.205, 0.155, 0.006], "pos": [0, 0.008, 0.0]}]
     for name, sign in (("right_door", -1.0), ("left_door", 1.0)):
         door = fridge["links"][name]
-        door["parts"] = door["parts"][:1] + [{**p, "pos": [sign * p["pos"][0], *p["pos"][1:]]} for p in BAR]
+        door["pos"] = [-0.22 * sign, -0.17, 0.0]
+        door["parts"] = [{"shape": "box", "size": [0.109, 0.012, 0.25], "pos": [0.109 * sign, -0.012, 0.0]}] + [
+            {**p, "pos": [sign * p["pos"][0], *p["pos"][1:]]} for p in BAR]
     raw["objects"]["banana"]["pose"] = {"xy": [0.05, -0.3]}      # clear of the door's swing
     raw["objects"]["lemon"]["pose"] = {"xy": [-0.36, -0.05]}
     # the hand's next step (shutting it again) waits 10 s: without one, the plan's end sends every hand home
