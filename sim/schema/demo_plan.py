@@ -282,7 +282,8 @@ class PickStep(PlanStep, GraspFields):
     square to its target, the one with the tips closing (thumb to fingers) along it (teleop/plan_steps/flat_place.py).
     carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s). close_thumb_last:
     true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
-    into the fingers' wall)."""
+    into the fingers' wall). return_home: true sends the hand back to its home pose once it has let go, rather
+    than leaving it risen over the place (where the other arm reaches in next)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -313,6 +314,15 @@ class PickStep(PlanStep, GraspFields):
     # flat pinch: of the turns that set the object square to its target, the one with the tips closing (thumb to
     # fingers) nearest this direction (degrees, world, from +x): the tips on the piece's free sides, off the target
     place_yaw: Number = Field(None, ge=-180.0, le=180.0, description="degrees in [-180, 180]")
+    # after letting go the hand goes back to its home pose, out of the other arm's way (teleop/plan_steps/pick.py)
+    return_home: Bool = False
+
+    @field_validator("return_home", mode="before")
+    @classmethod
+    def _let_go_first(cls, back, info: ValidationInfo):
+        if back is True and info.data.get("hold") is True:
+            raise ValueError("no return_home: true with hold: true (the hand keeps the object over its place)")
+        return back
 
     @field_validator("hold", mode="before")
     @classmethod

@@ -4,6 +4,7 @@ appends the step's wrist keyframes and hand targets to its hand's timeline."""
 from teleop.plan_steps import carry, drag, handover, held, pick, pour, press, strike, turn
 from teleop.plan_steps import via      # a pick through waypoints, or kept in the hand
 
-# a pick with via stops or hold: true is via's; of an object handed over, held's; else pick's
-PLANNERS = {"pick": via.planner(held.planner(pick.plan)), "drag": drag.plan, "pour": pour.plan, "press": press.plan,
-            "turn": turn.plan, "carry": carry.plan, "strike": strike.plan, "handover": handover.plan}
+# a pick with via stops or hold: true is via's; of an object handed over, held's; else pick's (any: return_home)
+PLANNERS = {"pick": pick.returning(via.planner(held.planner(pick.plan))), "drag": drag.plan, "pour": pour.plan,
+            "press": press.plan, "turn": turn.plan, "carry": carry.plan, "strike": strike.plan,
+            "handover": handover.plan}

@@ -1,13 +1,17 @@
 """Plan step `pick`: grasp and lift (teleop/plan_steps/pick_place.py), then one of three ways to put
 the object where it goes: slid in level through the side a container is open at (`place_from: front`,
 front_place.py), turned on the way so that an axis points down and lowered that end first
-(`place_axis`, axis_place.py), or carried over the target, lowered and let go (pick_place.py)."""
+(`place_axis`, axis_place.py), or carried over the target, lowered and let go (pick_place.py).
+A hand that has let go stays risen over the place for its next step, unless `return_home: true` (returning())."""
 
 from __future__ import annotations
+
+from typing import Callable
 
 import mujoco
 
 from sim.demo_plan import PLACE_FROM_FRONT
+from teleop.operator_motion import DURATIONS
 from teleop.plan_steps.axis_place import carry_and_place_axis_down
 from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
@@ -23,3 +27,16 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         carry_and_place_axis_down(op, data, item, item["pick"], offset)
     else:
         carry_and_place(op, data, item, item["pick"], offset)
+
+
+def returning(inner: Callable) -> Callable:
+    """The `pick` planner ``inner``, then with `return_home: true` the hand back to its home pose (over what is in
+    the way, teleop/transit.py): left risen over a tool box after placing the drill, the right arm met the left
+    one carrying the wrench in over the box."""
+    def planned(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
+        inner(op, data, item)
+        if item.get("return_home", False):
+            side = op.sides[item["hand"]]
+            op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=side["home"][0],
+                       quat=side["home"][1], hand=side["open"])
+    return planned
