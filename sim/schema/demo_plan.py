@@ -279,7 +279,8 @@ class PickStep(PlanStep, GraspFields):
     thumb and the pinching fingers (the folded ones stay), place_press_m (metres) sets it down that far below
     its release height, release_relax (a fraction) opens the thumb and the pinching fingers from where they
     hold that far towards the open hand, and place_yaw (degrees, world) picks, of the turns that set the object
-    square to its target, the one with the tips closing (thumb to fingers) along it (teleop/plan_steps/flat_place.py).
+    square to its target, the one with the tips closing (thumb to fingers) along it, and ease_turned: true turns the
+    slide off the thumb's side with the hand as it is turned square (teleop/plan_steps/flat_place.py).
     carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s). close_thumb_last:
     true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
     into the fingers' wall). return_home: true sends the hand back to its home pose once it has let go, rather
@@ -314,6 +315,8 @@ class PickStep(PlanStep, GraspFields):
     # flat pinch: of the turns that set the object square to its target, the one with the tips closing (thumb to
     # fingers) nearest this direction (degrees, world, from +x): the tips on the piece's free sides, off the target
     place_yaw: Number = Field(None, ge=-180.0, le=180.0, description="degrees in [-180, 180]")
+    # flat pinch: the ease off the thumb's side turns with the hand as the operator's looks turn it square
+    ease_turned: Bool = False
     # after letting go the hand goes back to its home pose, out of the other arm's way (teleop/plan_steps/pick.py)
     return_home: Bool = False
 
@@ -351,7 +354,7 @@ class PickStep(PlanStep, GraspFields):
     _power_only = field_validator("close_thumb_last", mode="before")(
         _only_with_grasp("power", "the order a palm grasp closes in"))
     _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", "place_yaw",
-                                       mode="before")(
+                                       "ease_turned", mode="before")(
         _only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
 
     @field_validator("place", mode="before")

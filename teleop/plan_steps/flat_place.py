@@ -26,7 +26,8 @@ the fingers apart only as far as they came in, slides the thumb off its side and
   `place_yaw` (degrees) picks, of the turns that set the object square, the one with the tips closing (thumb
   to fingers) nearest that direction rather than the smallest (turn_toward): a jigsaw piece set against the
   near side of the fixed one, turned the least, came down with the fingertips on the fixed piece, which held
-  it 1.7 cm up as the hand opened (jigsaw's yellow piece, left hand: place_yaw 0 lays it flat).
+  it 1.7 cm up as the hand opened (jigsaw's yellow piece, left hand: place_yaw 0 lays it flat);
+  `ease_turned: true` turns the ease off the thumb's side with the hand as the looks turn it (turn_ease).
 
 jigsaw_puzzle_assembly__iiwa7_sharpa, stream path, seeds 0-11, green and red pieces set 8 mm clear
 of the white one: 10 and 8 of 12 within the task's tolerance once let go (tests/teleop/test_flat_place.py).
@@ -129,6 +130,19 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     tl.add(EASE_STEPS, pos=opened.pos + EASE_M * away + EASE_UP_M * UP)
     tl.add(retreat.end_step - opened.end_step, pos=retreat.pos + EASE_M * away)
     end = len(tl.frames)
+    # `ease_turned: true`: the ease off the thumb's side turns with the hand as the looks below turn it; without
+    # it, it keeps the direction planned before them, and a hand turned a quarter (place_yaw) slid along the
+    # piece's side and dragged it 2-3 cm (jigsaw's yellow piece: placed on 3 -> 5 of 12)
+    ease = {"d": EASE_M * away} if item.get("ease_turned") else None
+
+    def turn_ease(turn: float) -> None:
+        if ease is None:
+            return
+        d = _rot_z(turn) @ ease["d"]
+        for frame in tl.frames[end - 2:end]:       # ease off, retreat
+            frame.pos = frame.pos + d - ease["d"]
+        ease["d"] = d
+
     carried_at, _, _, frames = side["corrections"][-1]     # lower_and_release's check above the target
     correction = (carried_at, name, offset, slice(frames.start, end))
     side["corrections"][-1] = correction
@@ -164,6 +178,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
             frame.pos = centre - turned
             frame.quat = quat(yawed(_mat(frame.quat), turn))
         held["offset"] = turned
+        turn_ease(turn)
         for i, entry in enumerate(side["corrections"]):
             if entry is correction:
                 side["corrections"][i] = (carried_at, name, turned, correction[3])
@@ -183,6 +198,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
             centre = frame.pos + np.array([actual[0], actual[1], held["offset"][2] + press])
             frame.pos = centre - turned
             frame.quat = quat(yawed(_mat(frame.quat), turn))
+        turn_ease(turn)
 
     op.on_frame_end(side, carry_frame - 1, set_off)
     op.on_frame_end(side, lower_frame - 1, lowering)
