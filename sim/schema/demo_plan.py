@@ -49,6 +49,20 @@ SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed pas
 TIPS_HEIGHT_RANGE_M = (0.0, 0.03)   # grasp_tips_height_m: a flat pinch's closed tips up to 3 cm over the object's bottom
 CARRY_RANGE_S = (0.0, 10.0)     # carry_s: a pick's carry, above 0 and at most 10 s
 TOE_IN_RANGE_DEG = (0.0, 30.0)  # toe_in_deg: a carry's fingers turned in towards the object, level .. 30 degrees
+SLIDE_CLEARANCE_RANGE_M = (0.0, 0.15)   # slide_clearance_m: a front place's object bottom over the cavity floor
+
+
+# place_from: front: the object's bottom this far above the cavity floor as it slides in (default 4 cm)
+SlideClearance = Annotated[Number, Field(ge=SLIDE_CLEARANCE_RANGE_M[0], le=SLIDE_CLEARANCE_RANGE_M[1],
+                                         description=f"metres in [{SLIDE_CLEARANCE_RANGE_M[0]:g}, "
+                                                     f"{SLIDE_CLEARANCE_RANGE_M[1]:g}]")]
+
+
+def _slid_in(clearance, info: ValidationInfo):
+    """slide_clearance_m only with place_from: front (nothing slides in otherwise)."""
+    if info.data.get("place_from") != PLACE_FROM_FRONT:
+        raise ValueError(f"no slide_clearance_m without place_from: {PLACE_FROM_FRONT} (nothing slides in)")
+    return clearance
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -259,7 +273,8 @@ class PickStep(PlanStep, GraspFields):
     """{hand, pick, place, [place_offset], [place_from], [grasp], [approach_pitch_deg], [grasp_yaw],
     [grasp_point], [grasp_squeeze_m], [grasp_tips_height_m], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
     or `table` with place_offset the spot on the table top). place_from: front slides it in level through the side a
-    container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor).
+    container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor), its bottom
+    slide_clearance_m over the cavity floor as it slides in (default 4 cm).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
     object's frame; pinch_fingers [index, middle, ...] are the fingers a pad pinch closes the thumb against
     (default the hand's own set, teleop/pinch_grasp.py), pinch_clear_tips: true spreads it until the fingertips,
@@ -326,6 +341,8 @@ class PickStep(PlanStep, GraspFields):
         if back is True and info.data.get("hold") is True:
             raise ValueError("no return_home: true with hold: true (the hand keeps the object over its place)")
         return back
+    slide_clearance_m: SlideClearance = None
+    _slid_in_only = field_validator("slide_clearance_m", mode="before")(_slid_in)
 
     @field_validator("hold", mode="before")
     @classmethod
@@ -589,7 +606,8 @@ class CarryStep(PlanStep):
     side a container is open at, a bowl into a microwave); grasp_height (metres from its centre, within
     its half height) is where the palms press; toe_in_deg (default 10) how far each hand's fingers turn in
     towards the object about the vertical, which swings the forearms apart behind it; return_home: true
-    sends both hands back to their home pose after letting go."""
+    sends both hands back to their home pose after letting go; slide_clearance_m (place_from: front) is
+    the object's bottom over the cavity floor as it slides in (default 4 cm)."""
 
     hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
 
@@ -603,6 +621,8 @@ class CarryStep(PlanStep):
     toe_in_deg: Number = Field(None, ge=TOE_IN_RANGE_DEG[0], le=TOE_IN_RANGE_DEG[1],
                                description=f"degrees in [{TOE_IN_RANGE_DEG[0]:g}, {TOE_IN_RANGE_DEG[1]:g}]")
     return_home: Bool = False
+    slide_clearance_m: SlideClearance = None
+    _slid_in_only = field_validator("slide_clearance_m", mode="before")(_slid_in)
 
     @field_validator("place", mode="before")
     @classmethod

@@ -27,7 +27,7 @@ from teleop.flat_pinch import width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, quat, yawed)
 from teleop.plan_steps.front_place import (CEILING_GAP_M, SLIDE_STEPS as FRONT_SLIDE_STEPS, SideOpening,
-                                           front_release, side_opening, slide_start)
+                                           front_release, side_opening, slide_clearance, slide_start)
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import place_centre, rest_centre
 from teleop.transit import bounding_box_points, hand_outline
@@ -150,7 +150,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         holds[side_name] = (out, hand_rotation(side_name, a, pitch_deg, toe_in), contact + out * (across - SQUEEZE_M),
                             contact + out * (across + SPREAD_M))
     if front:
-        back, slide = front_path(op, data, name, holds, centre, place, way_in)
+        back, slide = front_path(op, data, name, holds, centre, place, way_in, slide_clearance(item))
     # both set off from their home poses, as when the carry comes first: a hand an earlier step left
     # elsewhere (the right hand over the bowl it has just laid the baguette in) goes home first, the
     # other holding still
@@ -197,17 +197,17 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
 
 
 def front_path(op: PlanningOperator, data: mujoco.MjData, name: str, holds: dict, centre: np.ndarray,
-               place: np.ndarray, way_in: SideOpening) -> tuple[float, np.ndarray]:
+               place: np.ndarray, way_in: SideOpening, clearance: float) -> tuple[float, np.ndarray]:
     """`place_from: front`: how far out along the opening (from where the object's centre is let go at
     ``place``) the object and both hands holding it are clear of the opening's plane, and the object
-    centre's height-adjusted ``place`` it slides in at (its bottom clear of the cavity floor)."""
+    centre's height-adjusted ``place`` it slides in at (its bottom ``clearance`` above the cavity floor)."""
     model = op.scene.model
     ahead = [bounding_box_points(model, data, op.scene.object_body_ids[name]) - centre]
     for side_name, (_, hand_rot, squeezed, _) in holds.items():
         side = op.sides[side_name]
         closed = op.power(side, (FINGER_CLOSURE, FINGER_CLOSURE))
         ahead.append(hand_outline(side["hand"], side_name, closed, side["open"]) @ hand_rot.T + (squeezed - centre))
-    return slide_start(place, way_in, float(np.max(np.concatenate(ahead) @ -way_in.out)))
+    return slide_start(place, way_in, float(np.max(np.concatenate(ahead) @ -way_in.out)), clearance)
 
 
 def slide_in_and_part(op: PlanningOperator, side_name: str, hold: tuple, held: np.ndarray, place: np.ndarray,

@@ -103,12 +103,20 @@ def front_release(op: PlanningOperator, data: mujoco.MjData, item: dict, name: s
                      + RELEASE_GAP_M])
 
 
-def slide_start(place: np.ndarray, way_in: SideOpening, lead: float) -> tuple[float, np.ndarray]:
+def slide_clearance(item: dict) -> float:
+    """A front place's `slide_clearance_m`: the object's bottom above the cavity floor as it slides in
+    (default SLIDE_CLEARANCE_M)."""
+    value = item.get("slide_clearance_m")
+    return SLIDE_CLEARANCE_M if value is None else float(value)
+
+
+def slide_start(place: np.ndarray, way_in: SideOpening, lead: float,
+                clearance: float = SLIDE_CLEARANCE_M) -> tuple[float, np.ndarray]:
     """How far out along the opening, from ``place`` (where what is slid in is let go), it starts so
     that what reaches ``lead`` ahead of ``place`` into the opening is clear of the opening's plane; and
-    ``place`` at the height it slides in at (its bottom clear of the cavity floor)."""
+    ``place`` at the height it slides in at (its bottom ``clearance`` above the cavity floor)."""
     back = max(0.0, float((place - way_in.mouth) @ -way_in.out) + lead + OUTSIDE_M)
-    return back, place + (SLIDE_CLEARANCE_M - RELEASE_GAP_M) * UP
+    return back, place + (clearance - RELEASE_GAP_M) * UP
 
 
 def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
@@ -136,7 +144,7 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     open_pts = hand_outline(side["hand"], item["hand"], side["open"]) @ R_hand.reshape(3, 3).T
     room = way_in.ceiling - CEILING_GAP_M - float(place[2] + max(open_pts[:, 2].max(), hand_pts[:, 2].max()))
     rise = max(WITHDRAW_RISE_M, min(float(body_pts[:, 2].max() + OFF_TOP_M - open_pts[:, 2].min()), room))
-    back, slide = slide_start(place, way_in, lead)
+    back, slide = slide_start(place, way_in, lead, slide_clearance(item))
     carry_frame = len(tl.frames)
     op.set_off(side, data, item, CARRY_STEPS, pos=slide + back * out, carried=(name, offset))
     # outside the opening the operator looks where the object sits in the hand and corrects the rest

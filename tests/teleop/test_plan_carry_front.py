@@ -15,7 +15,7 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task, parse_task
 from teleop.plan_steps.carry import AT_HOME_M, FINGERS_DOWN_DEG, RIM_CLEAR_M, SQUEEZE_M, fingers_pitch
-from teleop.plan_steps.front_place import OUTSIDE_M, RELEASE_GAP_M
+from teleop.plan_steps.front_place import OUTSIDE_M, RELEASE_GAP_M, SLIDE_CLEARANCE_M
 from teleop.transit import bounding_box_points, hand_outline
 from plan_runs import home_and_plan
 
@@ -49,6 +49,8 @@ def _planned(tmp_path, before=()):
     ({"place_from": "side"}, "place_from", r"\['above', 'front'\]"),
     ({"place": "table"}, "place", r"with place_from: front, a container from \['microwave'\]"),
     ({"place": "baguette"}, "place", r"with place_from: front, a container from \['microwave'\]"),
+    ({"place_from": None, "slide_clearance_m": 0.06}, "slide_clearance_m", r"no slide_clearance_m without place_from"),
+    ({"slide_clearance_m": 0.2}, "slide_clearance_m", r"metres in \[0, 0.15\]"),
 ])
 def test_the_check_refuses_a_bad_way_in(tmp_path, fields, field, expected):
     with pytest.raises(SpecError, match=rf"field 'demo_plan\[0\]\.{field}'.*{expected}"):
@@ -115,6 +117,24 @@ def test_both_palms_slide_it_in_level_let_go_on_the_floor_and_part_clear_of_it(t
         assert (hand @ across).min() >= task.objects["bowl"].half_extents[0]
         assert np.allclose(fr[BACK].pos - fr[APART].pos, outside - slide), "back out the way it came in"
     assert [(name, on) for _, name, _, on in op.moves] == [("bowl", "microwave")]
+
+
+def test_slide_clearance_m_raises_the_slide_in_and_nothing_else(tmp_path):
+    """slide_clearance_m: the object's bottom that high over the cavity floor as it slides in (default
+    SLIDE_CLEARANCE_M): the frames outside the opening and slid in are raised by the difference, the
+    rest are where they were (a bowl hung tilted from the RH5DG2's thumbs caught the microwave's front
+    edge 4 cm up)."""
+    def planned(**fields):
+        raw = _raw(**fields)
+        task = parse_task(raw, tmp_path / "microwave.yaml")
+        scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
+        return home_and_plan(scene)[1].sides["right"]["timeline"].frames
+    default, raised = planned(), planned(slide_clearance_m=SLIDE_CLEARANCE_M + 0.02)
+    assert len(default) == len(raised)
+    for k, (a, b) in enumerate(zip(default, raised)):
+        lift = 0.02 if k - len(default) in (OUTSIDE, SLIDE) else 0.0
+        assert b.pos - a.pos == pytest.approx([0.0, 0.0, lift], abs=1e-9), k
+    assert planned(slide_clearance_m=SLIDE_CLEARANCE_M)[SLIDE].pos == pytest.approx(default[SLIDE].pos)
 
 
 def test_the_fingers_pitch_down_only_as_far_as_the_object_s_bottom(tmp_path):
