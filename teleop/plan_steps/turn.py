@@ -18,6 +18,9 @@ pulled by its handle, a bar standing off its face: the fingers come down along t
 the gap behind the bar and the pads draw it round; shutting it again from in front, the fingers come
 down in front of the bar the same way and push it back. With `palm_from` (opt-in) the fingers lie
 along the hinge all the way and from that angle on the flat palm pushes (teleop/plan_steps/palm_push.py).
+A lid let go below vertical at that handoff falls back; with `palm_look` (opt-in) the hand backs well off,
+and the operator looks where the link is as the hand moves in under it, comes up to it and presses, and
+turns the palm's keyframes about the hinge to it (`palm_look`).
 With `withdraw_past_end` (opt-in) the hand, once it lets go, moves level out along the link past its free end
 and goes on from there, rather than rising over the link (the arm behind it would lie across a tall door's top).
 """
@@ -55,6 +58,8 @@ GRAVITY_TORQUE_NM = 1e-3      # below this the link stays where it is let go (a 
 RAY_BACKOFF_M = 0.3           # rays start this far off the link, on the pushing side
 PULL_AHEAD_M = 0.1            # a hand resting this far ahead of the face the link swings towards pulls it (below)
 UPRIGHT_AXIS_COS = 0.5        # a hinge axis within 60 degrees of vertical is upright (a door's): pulling fingers point down
+LOOK_BACK_OFF_M = 0.1         # with palm_look the fingertips back this far off the face: clear of the link as it falls back
+LOOKS = 3                     # palm_look: the operator looks as the hand sets off under the face, up to it, and presses
 EDGE_TOL_M = 0.01             # corners of the handle part this close to its farthest reach make up a free edge
 
 
@@ -150,6 +155,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         op.set_off(side, data, item, DURATIONS["approach"], pos=approach, quat=quat(first[1]), hand=side["open"])
     tl.add(DURATIONS["descend"], pos=first[0])
     previous, previous_angle, previous_R = (faces[radii[0]], first[0]), start, first[1]
+    palm_frames: dict[int, float] = {}      # timeline frame -> the link angle its palm pose was planned for
     for angle, radius, tilt in zip(arc, radii, tilts):
         pos, R = pose(angle, radius, tilt)
         face = link.rotated(faces[radius], angle - start)
@@ -159,11 +165,27 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
             # from fingertips onto the palm: the hand first backs off the face until the palm (which stands
             # higher off the hand than the fingertip pads) is clear of it, comes in just off the face, then presses
             back_off = FACE_GAP_M + max(0.0, palm[1] - float(fingers[:, 1].min()))
-            tl.add(DURATIONS["open"], pos=previous[1] - back_off * previous_R[:, 1])
+            if item.get("palm_look", False):
+                # the link falls back as the fingertips let go: the hand backs well off, moves in under the
+                # face there, then comes up to it where the operator sees it (palm_look below)
+                back_off = max(back_off, LOOK_BACK_OFF_M)
+                tl.add(DURATIONS["open"], pos=previous[1] - back_off * previous_R[:, 1])
+                tl.add(DURATIONS["open"], pos=pose(angle, radius, tilt, back_off)[0], quat=quat(R))
+                palm_frames[len(tl.frames) - 1] = angle
+            else:
+                tl.add(DURATIONS["open"], pos=previous[1] - back_off * previous_R[:, 1])
             tl.add(DURATIONS["descend"], pos=pose(angle, radius, tilt, FACE_GAP_M)[0], quat=quat(R))
+            palm_frames[len(tl.frames) - 1] = angle
         previous_angle, previous_R = angle, R
         tl.add(steps, pos=pos, quat=quat(R))
+        if palm_turns(angle, palm_from, way):
+            palm_frames[len(tl.frames) - 1] = angle
         previous = (face, pos)
+    if palm_frames and item.get("palm_look", False):
+        # opt-in: as the fingertips back off for the palm, the operator looks where the link is (let go, a lid
+        # falls back some way) and the palm comes in at it rather than at the planned angle
+        for frame in sorted(palm_frames)[:LOOKS]:
+            op.on_frame_end(side, frame - 1, palm_look(op, side, link, item["turn"], palm_frames, target, frame))
     # draw back off the face the way the fingers came (a palm: straight off it), then rise clear of
     # the link and what it is on
     pos = pos - APPROACH_HEIGHT_M * (R[:, 1] if palm_turns(arc[-1], palm_from, way) else R[:, 2])
@@ -185,6 +207,35 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         # over whatever is in the way, the link as it was left included (a tall door pulled open past
         # square stands between the hand and home: teleop/transit.py)
         op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
+
+
+def palm_look(op: PlanningOperator, side: dict, link: "Hinge", joint: str, palm_frames: dict[int, float],
+              target: float, first: int):
+    """The look when the palm takes over a turn: ``palm_frames`` (timeline frame -> link angle it was
+    planned for) turn about the hinge with the link, the first to the link's angle now and the rest spread
+    from there to ``target`` over the same steps (a palm pose is fixed to the link: fingers along the
+    hinge, the palm square to the face)."""
+    adr = op.scene.model.jnt_qposadr[op.scene.model.joint(joint).id]
+
+    def look_at_link(data: mujoco.MjData) -> None:
+        now = float(data.qpos[adr])
+        ref = palm_frames[first]
+        if abs(target - ref) < 1e-9:
+            return
+        frames = side["timeline"].frames
+        for i, planned in [(i, a) for i, a in palm_frames.items() if i >= first]:
+            delta = now + (planned - ref) * (target - now) / (target - ref) - planned
+            turn = axis_rotation(link.axis, delta)
+            frames[i].pos = link.anchor + turn @ (frames[i].pos - link.anchor)
+            frames[i].quat = quat(turn @ _matrix(frames[i].quat))
+            palm_frames[i] = planned + delta
+    return look_at_link
+
+
+def _matrix(q: np.ndarray) -> np.ndarray:
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, np.asarray(q, float))
+    return R.reshape(3, 3)
 
 
 def _solve(kin, pos: np.ndarray, R: np.ndarray, q: np.ndarray) -> np.ndarray:
