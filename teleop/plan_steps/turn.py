@@ -31,6 +31,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from sim.embodiment.frames import quat_to_mat
 from sim.embodiment.mirror import mirror_vec
 from sim.errors import SpecError
 from sim.physics import CONTROL_HZ
@@ -227,15 +228,9 @@ def palm_look(op: PlanningOperator, side: dict, link: "Hinge", joint: str, palm_
             delta = now + (planned - ref) * (target - now) / (target - ref) - planned
             turn = axis_rotation(link.axis, delta)
             frames[i].pos = link.anchor + turn @ (frames[i].pos - link.anchor)
-            frames[i].quat = quat(turn @ _matrix(frames[i].quat))
+            frames[i].quat = quat(turn @ quat_to_mat(frames[i].quat))
             palm_frames[i] = planned + delta
     return look_at_link
-
-
-def _matrix(q: np.ndarray) -> np.ndarray:
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, np.asarray(q, float))
-    return R.reshape(3, 3)
 
 
 def _solve(kin, pos: np.ndarray, R: np.ndarray, q: np.ndarray) -> np.ndarray:
