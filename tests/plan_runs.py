@@ -1,6 +1,11 @@
 """Run a planned demonstration part of the way, for tests of plan steps."""
 
+import dataclasses
+
 from sim import physics
+from sim.demo_plan import PlanScope, parse_plan
+from sim.scene.builder import demonstration_scene
+from sim.tasks import load_task
 from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
 
@@ -38,3 +43,18 @@ def looks_with_object_under_wrist(op, data, name: str, looks: tuple[str, ...], h
     for _, adjust in side["looks"]:
         if adjust.__name__ in looks:
             adjust(data)
+
+
+def parse_steps(task: str, steps: list[dict]):
+    """``(spec, plan)``: task ``task``'s spec and ``steps`` parsed as its plan (a bad step raises SpecError)."""
+    spec = load_task(task)
+    return spec, parse_plan(f"{task}.yaml", {"demo_plan": steps}, PlanScope(spec.objects, spec.zones, spec.points))
+
+
+def plan_steps_on(task: str, embodiment: str, steps: list[dict], seed: int = 0):
+    """``(operator, data)``: ``steps`` planned as task ``task``'s plan on ``embodiment``, demonstration
+    seed ``seed``, from the home pose."""
+    spec, plan = parse_steps(task, steps)
+    scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), embodiment, seed)
+    data, op = home_and_plan(scene)
+    return op, data

@@ -29,6 +29,7 @@ import mujoco
 import numpy as np
 
 from sim.demo_plan import TABLE_TARGET
+from sim.embodiment.frames import quat_to_mat
 from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M, RELEASE_GAP_M, lower_and_release, place_offset, planned_top
@@ -37,11 +38,6 @@ DOWN = -UP
 CLEAR_M = 0.03          # turned and above its place, the object's lower end this far above the target's top
 YAW_STEP_DEG = 15.0     # turns about the vertical tried for a hand pose the arm reaches
 
-
-def _mat(q: np.ndarray) -> np.ndarray:
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, np.asarray(q, float))
-    return R.reshape(3, 3)
 
 
 def turn_down(direction: np.ndarray, hand_rot: np.ndarray, short_deg: float = 0.0) -> np.ndarray:
@@ -104,7 +100,7 @@ def carry_and_place_axis_down(op: PlanningOperator, data: mujoco.MjData, item: d
     task = op.scene.task
     obj = task.objects[name]
     axis = axis_local(item)
-    hand_rot = _mat(tl.frames[-1].quat)        # as lifted
+    hand_rot = quat_to_mat(tl.frames[-1].quat)        # as lifted
     obj_rot = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3)   # held as it lies now
     half = float(np.abs(axis) @ obj.half_extents)     # its half length along the vertical once turned
     at = place_offset(item)

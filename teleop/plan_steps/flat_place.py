@@ -39,6 +39,7 @@ import mujoco
 import numpy as np
 
 from sim.demo_plan import TABLE_TARGET
+from sim.embodiment.frames import quat_to_mat
 from sim.embodiment.mirror import mirror_vec
 from teleop.flat_pinch import tip_axis, tip_pinch
 from teleop.operator_motion import UP, SideTimeline, quat, yawed
@@ -101,11 +102,6 @@ def _rot_z(angle: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def _mat(q: np.ndarray) -> np.ndarray:
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, np.asarray(q, float))
-    return R.reshape(3, 3)
-
 
 def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray,
                carry_frame: int, lower_frame: int, release_hand: np.ndarray) -> None:
@@ -125,7 +121,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     retreat = tl.frames.pop()
     axis_site = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand) ...
     axis_site = mirror_vec(axis_site) if item["hand"] == "left" else axis_site     # ... this hand's
-    axis = _mat(opened.quat) @ axis_site
+    axis = quat_to_mat(opened.quat) @ axis_site
     away = -np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
     tl.add(EASE_STEPS, pos=opened.pos + EASE_M * away + EASE_UP_M * UP)
     tl.add(retreat.end_step - opened.end_step, pos=retreat.pos + EASE_M * away)
@@ -163,7 +159,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
             return turn
         # `place_yaw`: of the square turns, the one that sets the tips closing along it (a piece set against
         # another's side: the tips on its free sides, not between the two, where they landed on the other piece)
-        closing = _mat(tl.frames[lower_frame].quat) @ axis_site
+        closing = quat_to_mat(tl.frames[lower_frame].quat) @ axis_site
         return turn_toward(turn, footprint_period(obj.half_extents), float(np.arctan2(closing[1], closing[0])),
                            np.radians(item["place_yaw"]))
 
@@ -176,7 +172,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         for frame in tl.frames[carry_frame:end]:
             centre = frame.pos + offset                 # where the plan has the object's centre
             frame.pos = centre - turned
-            frame.quat = quat(yawed(_mat(frame.quat), turn))
+            frame.quat = quat(yawed(quat_to_mat(frame.quat), turn))
         held["offset"] = turned
         turn_ease(turn)
         for i, entry in enumerate(side["corrections"]):
@@ -197,7 +193,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         for frame in tl.frames[lower_frame:end]:
             centre = frame.pos + np.array([actual[0], actual[1], held["offset"][2] + press])
             frame.pos = centre - turned
-            frame.quat = quat(yawed(_mat(frame.quat), turn))
+            frame.quat = quat(yawed(quat_to_mat(frame.quat), turn))
         turn_ease(turn)
 
     op.on_frame_end(side, carry_frame - 1, set_off)

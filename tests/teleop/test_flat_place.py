@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from sim.demo_plan import PlanScope, parse_plan
+from sim.embodiment.frames import quat_to_mat
 from sim.scene.builder import demonstration_scene
 from sim.scene.sample import demonstration_seed
 from sim.tasks import load_task
@@ -15,7 +16,7 @@ from teleop.demos import OPERATORS
 from teleop.flat_pinch import tip_axis
 from teleop.operator_motion import DURATIONS, yawed
 from teleop.plan_steps.pick_place import flat_pinch
-from teleop.plan_steps.flat_place import EASE_M, EASE_STEPS, EASE_UP_M, _mat, _yaw, square_turn
+from teleop.plan_steps.flat_place import EASE_M, EASE_STEPS, EASE_UP_M, _yaw, square_turn
 from teleop.recorder import record_episode
 from plan_runs import home_and_plan
 
@@ -65,7 +66,7 @@ def test_the_hand_opens_to_its_preshape_then_slides_off_the_thumb_side_and_lifts
     moved = ease.pos - opened.pos
     assert ease.end_step - opened.end_step == EASE_STEPS
     assert np.isclose(np.linalg.norm(moved[:2]), EASE_M) and np.isclose(moved[2], EASE_UP_M)
-    thumb_to_fingers = _mat(opened.quat) @ tip_axis("sharpa", opened.hand)
+    thumb_to_fingers = quat_to_mat(opened.quat) @ tip_axis("sharpa", opened.hand)
     assert moved[:2] @ thumb_to_fingers[:2] < -0.9 * EASE_M * np.linalg.norm(thumb_to_fingers[:2])   # the thumb's way
     assert retreat.end_step - ease.end_step == DURATIONS["retreat"] and retreat.pos[2] > ease.pos[2] + 0.1
 
@@ -92,6 +93,6 @@ def test_a_jigsaw_piece_is_set_square_beside_the_fixed_one():
     assert record["stage_final"][rec.stage_ids.index("green_placed")], record["stage_final"]
     assert not record["drop"] and not record["high_speed"]
     green = rec.object_names.index("green_piece")
-    R = _mat(rec.object_pose[-1, green, 3:])        # xyz + wxyz
+    R = quat_to_mat(rec.object_pose[-1, green, 3:])        # xyz + wxyz
     assert R[2, 2] > np.cos(np.radians(3))                          # level
     assert abs((np.degrees(_yaw(R)) + 45) % 90 - 45) < 10           # square to the white piece (yaw 0)

@@ -2,41 +2,30 @@
 thumb's side of the hand as the operator's look turned it square, not along the direction planned before the turn
 (jigsaw's yellow piece, its hand turned a quarter by place_yaw: slid along the piece's side and dragged it 2-3 cm)."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from sim.demo_plan import PlanScope, parse_plan
+from sim.embodiment.frames import quat_to_mat
 from sim.errors import SpecError
-from sim.scene.builder import demonstration_scene
-from sim.tasks import load_task
 from teleop.flat_pinch import tip_axis
-from teleop.plan_steps.flat_place import EASE_M, _mat
+from teleop.plan_steps.flat_place import EASE_M
 from teleop.plan_steps.pick_place import flat_pinch
-from plan_runs import home_and_plan, looks_with_object_under_wrist
+from plan_runs import looks_with_object_under_wrist, parse_steps, plan_steps_on
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.02, -0.016],
          "grasp": "flat_pinch", "grasp_yaw": 90}
 
 
-def _parse(step: dict):
-    spec = load_task(TASK)
-    return spec, parse_plan("jigsaw.yaml", {"demo_plan": [step]}, PlanScope(spec.objects, spec.zones, spec.points))
-
-
 def _ease_and_away(step: dict) -> tuple[np.ndarray, np.ndarray]:
     """After the look as the hand sets off: the ease off's horizontal move from the opened hand, and the
     horizontal unit vector from the turned hand's fingers' tips to its thumb's."""
-    spec, plan = _parse(step)
-    scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), EMBODIMENT, 0)
-    data, op = home_and_plan(scene)
+    op, data = plan_steps_on(TASK, EMBODIMENT, [step])
     looks_with_object_under_wrist(op, data, "green_piece", ("set_off",))
     frames = op.sides["right"]["timeline"].frames
     ease, opened = frames[-3], frames[-4]       # from the end: back home, retreat, ease off, open
     ready = flat_pinch(op, data, op.scene.task.demo_plan[0], "green_piece")[1]
-    axis = _mat(opened.quat) @ tip_axis("sharpa", ready)
+    axis = quat_to_mat(opened.quat) @ tip_axis("sharpa", ready)
     away = -np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
     return np.array([*(ease.pos - opened.pos)[:2], 0.0]), away
 
@@ -45,7 +34,7 @@ def test_ease_turned_is_a_flat_pinchs_only():
     step = {**GREEN, "grasp": "power", "ease_turned": True}
     del step["grasp_yaw"]
     with pytest.raises(SpecError, match=r"field 'demo_plan\[0\]\.ease_turned'.*no ease_turned without grasp: flat_pinch"):
-        _parse(step)
+        parse_steps(TASK, [step])
 
 
 def test_ease_turned_slides_off_the_thumbs_side_of_the_turned_hand():

@@ -2,36 +2,23 @@
 the thumb and the pinching fingers, `place_press_m` sets the object down that far below its release height,
 `release_relax` opens them from where they hold rather than to the pre-shape."""
 
-import dataclasses
-
 import mujoco
 import numpy as np
 import pytest
 
-from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
-from sim.scene.builder import demonstration_scene
-from sim.tasks import load_task
 from teleop.flat_pinch import tip_pinch
 from teleop.plan_steps.flat_place import PRESS_M
 from teleop.plan_steps.pick_place import flat_pinch
-from plan_runs import home_and_plan, looks_with_object_under_wrist
+from plan_runs import looks_with_object_under_wrist, parse_steps, plan_steps_on
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.02, -0.016],
          "grasp": "flat_pinch", "grasp_yaw": 90}
 
 
-def _parse(step: dict):
-    spec = load_task(TASK)
-    return spec, parse_plan("jigsaw.yaml", {"demo_plan": [step]}, PlanScope(spec.objects, spec.zones, spec.points))
-
-
 def _op(step: dict):
-    spec, plan = _parse(step)
-    scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), EMBODIMENT, 0)
-    data, op = home_and_plan(scene)
-    return op, data
+    return plan_steps_on(TASK, EMBODIMENT, [step])
 
 
 @pytest.mark.parametrize(("extra", "expected"), [
@@ -45,8 +32,8 @@ def test_the_release_fields_are_a_flat_pinchs_only(extra, expected):
     step = {**GREEN, **extra}
     if step["grasp"] != "flat_pinch":
         del step["grasp_yaw"]
-    with pytest.raises(SpecError, match=rf"jigsaw.yaml: field 'demo_plan\[0\]\.{next(iter(extra.keys() - {'grasp'}))}'.*{expected}"):
-        _parse(step)
+    with pytest.raises(SpecError, match=rf"jigsaw_puzzle_assembly.yaml: field 'demo_plan\[0\]\.{next(iter(extra.keys() - {'grasp'}))}'.*{expected}"):
+        parse_steps(TASK, [step])
 
 
 def test_release_pinch_only_keeps_the_folded_fingers_as_they_held():

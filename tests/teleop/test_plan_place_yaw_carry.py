@@ -2,20 +2,16 @@
 grasp: flat_pinch, `place_yaw` (of the turns that set the object square to its target, the one with the
 tips closing along that direction: teleop/plan_steps/flat_place.py)."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from sim.demo_plan import PlanScope, parse_plan
+from sim.embodiment.frames import quat_to_mat
 from sim.errors import SpecError
-from sim.scene.builder import demonstration_scene
-from sim.tasks import load_task
 from teleop.flat_pinch import tip_axis
 from teleop.operator_motion import DURATIONS
-from teleop.plan_steps.flat_place import _mat, turn_toward
+from teleop.plan_steps.flat_place import turn_toward
 from teleop.plan_steps.pick_place import flat_pinch
-from plan_runs import home_and_plan, looks_with_object_under_wrist
+from plan_runs import looks_with_object_under_wrist, parse_steps, plan_steps_on
 
 TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
 GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.008, -0.016],
@@ -23,11 +19,7 @@ GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_
 
 
 def _op(step: dict):
-    spec = load_task(TASK)
-    plan = parse_plan("jigsaw.yaml", {"demo_plan": [step]}, PlanScope(spec.objects, spec.zones, spec.points))
-    scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), EMBODIMENT, 0)
-    data, op = home_and_plan(scene)
-    return op, data
+    return plan_steps_on(TASK, EMBODIMENT, [step])
 
 
 @pytest.mark.parametrize(("extra", "expected"), [
@@ -38,13 +30,12 @@ def _op(step: dict):
     ({"place": "table", "place_offset": [0.2, 0.0], "place_yaw": 0}, "no place_yaw with place: table"),
 ])
 def test_the_fields_are_checked(extra, expected):
-    spec = load_task(TASK)
     step = {**GREEN, **extra}
     if step["grasp"] != "flat_pinch":
         del step["grasp_yaw"]
     field = next(iter(extra.keys() - {"grasp", "place", "place_offset"}))
     with pytest.raises(SpecError, match=rf"field 'demo_plan\[0\]\.{field}'.*{expected}"):
-        parse_plan("jigsaw.yaml", {"demo_plan": [step]}, PlanScope(spec.objects, spec.zones, spec.points))
+        parse_steps(TASK, [step])
 
 
 def test_carry_s_sets_how_long_the_carry_takes():
@@ -77,7 +68,7 @@ def _heading_after_set_off(step: dict) -> float:
     looks_with_object_under_wrist(op, data, "green_piece", ("set_off",))
     ready = flat_pinch(op, data, op.scene.task.demo_plan[0], "green_piece")[1]
     lower = side["timeline"].frames[-5]
-    axis = _mat(lower.quat) @ tip_axis("sharpa", ready)
+    axis = quat_to_mat(lower.quat) @ tip_axis("sharpa", ready)
     return float(np.degrees(np.arctan2(axis[1], axis[0])))
 
 
