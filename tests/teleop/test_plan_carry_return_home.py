@@ -44,11 +44,6 @@ def test_check_refuses_a_return_home_that_is_not_a_flag(value):
         _plan([{**CARRY, "return_home": value}])
 
 
-def test_only_a_carry_takes_return_home():
-    with pytest.raises(SpecError, match=r"demo_plan\[0\]\.return_home"):
-        _plan([{"hand": "right", "pick": "soap", "place": "wooden_box", "return_home": True}])
-
-
 def test_hands_part_then_go_home_and_the_carry_itself_is_unchanged():
     _, plain = _frames([CARRY, {"hand": "right", "pick": "soap", "place": "wooden_box", "after": [0]}])
     op, homed = _frames([{**CARRY, "return_home": True},
