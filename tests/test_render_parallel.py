@@ -9,6 +9,7 @@ import pytest
 
 from episodes.h5_concat import concat_frames
 from episodes.raw import write_raw
+from episodes.render_pool import shared_helpers
 from episodes.stages import assemble_episode, render_to_file, replay_to_file
 from episodes.validate import validate_episode
 from episodes.writer import EpisodeWriter
@@ -48,6 +49,7 @@ def replay_path(raw_path, tmp_path_factory):
 def test_two_workers_render_the_same_arrays_as_one(replay_path, tmp_path):
     profile = parse_sensor_profile(TINY)
     one = render_to_file(replay_path, profile, tmp_path / "one.render.h5", workers=1)
+    shared_helpers(1)       # up before the render: one that is still starting is not waited for, takes no frame
     two = render_to_file(replay_path, profile, tmp_path / "two.render.h5", workers=2)
     assert (one["workers"], two["workers"]) == (1, 2)
     assert one["frames"] == two["frames"] == 18
