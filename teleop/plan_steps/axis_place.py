@@ -39,7 +39,6 @@ CLEAR_M = 0.03          # turned and above its place, the object's lower end thi
 YAW_STEP_DEG = 15.0     # turns about the vertical tried for a hand pose the arm reaches
 
 
-
 def turn_down(direction: np.ndarray, hand_rot: np.ndarray, short_deg: float = 0.0) -> np.ndarray:
     """The smallest rotation (world) that takes unit ``direction`` to straight down (``short_deg``: to
     that many degrees short of it); an axis pointing straight up turns over about the hand's own

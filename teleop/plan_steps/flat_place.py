@@ -102,7 +102,6 @@ def _rot_z(angle: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-
 def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray,
                carry_frame: int, lower_frame: int, release_hand: np.ndarray) -> None:
     """For a pick with `grasp: flat_pinch` whose carry starts at frame ``carry_frame`` and which
