@@ -165,6 +165,13 @@ class ScriptedOperator:
         if height > pos[2]:
             tl.add(DURATIONS["descend"], pos=pos)
 
+    def set_off_home(self, side: dict, data: mujoco.MjData, hand=None) -> None:
+        """Take the hand back to where it rests (``hand``: its joints on the way, else as they are), over
+        whatever is in the way (set_off): once a step is done, an arm left where it worked can meet the
+        other arm's next step, and the pose it stretched into can leave the next step out of reach."""
+        self.set_off(side, data, {"hand": side["name"]}, DURATIONS["approach"], pos=side["home"][0],
+                     quat=side["home"][1], hand=hand)
+
     def look_again(self, side: dict, name: str, data, first: int, end: int, planned=None) -> None:
         """When the hand sets off towards ``name`` (the start of frame ``first``), the operator looks
         where it is now (an earlier step may have pushed or nudged it) and moves frames

@@ -11,7 +11,6 @@ from typing import Callable
 import mujoco
 
 from sim.demo_plan import PLACE_FROM_FRONT
-from teleop.operator_motion import DURATIONS
 from teleop.plan_steps.axis_place import carry_and_place_axis_down
 from teleop.plan_steps.front_place import carry_and_place_front
 from teleop.plan_steps.operator import PlanningOperator
@@ -37,6 +36,5 @@ def returning(inner: Callable) -> Callable:
         inner(op, data, item)
         if item.get("return_home", False):
             side = op.sides[item["hand"]]
-            op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=side["home"][0],
-                       quat=side["home"][1], hand=side["open"])
+            op.set_off_home(side, data, hand=side["open"])
     return planned

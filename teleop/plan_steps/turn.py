@@ -207,7 +207,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     if item.get("return_home", True):
         # over whatever is in the way, the link as it was left included (a tall door pulled open past
         # square stands between the hand and home: teleop/transit.py)
-        op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
+        op.set_off_home(side, data)
 
 
 def palm_look(op: PlanningOperator, side: dict, link: "Hinge", joint: str, palm_frames: dict[int, float],
