@@ -10,6 +10,11 @@ from teleop.recorder import home
 from teleop.scripted_operator import ScriptedOperator
 
 
+# jigsaw_puzzle_assembly's first step on its paper embodiment, the flat pinch's tests' subject
+JIGSAW = ("jigsaw_puzzle_assembly", "iiwa7_sharpa")
+JIGSAW_GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.008, -0.016],
+                "grasp": "flat_pinch", "grasp_yaw": 90}
+
 def rise_through_lift(scene, data, op, name: str, hand: str = "right") -> float:
     """Run the direct joint path until the hand's lift (the first keyframe 10 cm above the one before,
     after the approach: the hand comes down, closes, lifts) and return how far object ``name`` rose (m)."""

@@ -11,11 +11,10 @@ from teleop.flat_pinch import tip_axis
 from teleop.operator_motion import DURATIONS
 from teleop.plan_steps.flat_place import turn_toward
 from teleop.plan_steps.pick_place import flat_pinch
-from plan_runs import looks_with_object_under_wrist, parse_steps, plan_steps_on
+from plan_runs import JIGSAW, JIGSAW_GREEN, looks_with_object_under_wrist, parse_steps, plan_steps_on
 
-TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
-GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.008, -0.016],
-         "grasp": "flat_pinch", "grasp_yaw": 90}
+TASK, EMBODIMENT = JIGSAW
+GREEN = JIGSAW_GREEN
 
 
 def _op(step: dict):
