@@ -159,9 +159,10 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
         stored = _bytes_by_modality(tmp / "episode_e.hdf5")
         parallel = {}
         if workers > 1:
-            from b2d_cli.render_workers_bench import cold_start_figures, parallel_render_figures
+            from b2d_cli.render_workers_bench import batch_figures, cold_start_figures, parallel_render_figures
             parallel = parallel_render_figures(tmp / "e.replay.h5", profile, workers, tmp)
             parallel["one_file_in_a_fresh_process"] = cold_start_figures(raw, profile, workers, tmp)
+            parallel["a_batch_of_recordings"] = batch_figures(raw, profile, workers, tmp)
         comparison = _tessellation_comparison(tmp / "e.replay.h5", profile) if profile.tessellation else {}
         layers = _still_layer_comparison(tmp / "e.replay.h5", profile)
         setup_ways = _renderer_setup_comparison(task, embodiment, profile)

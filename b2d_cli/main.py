@@ -158,28 +158,30 @@ def record(task, embodiment, episodes, out_dir, first_index, max_steps, operator
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
 @click.option("--max-frames", default=None, type=click.IntRange(min=1), help="Render at most this many frames per episode.")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
-              help="Processes rendering each episode's frames (same arrays for any count).")
+              help="Processes: several recordings run whole in that many at once; one recording shares its "
+                   "render between them (same arrays for any count).")
 @click.option("--drift-bound-m", default=0.005, show_default=True, type=click.FloatRange(min=0.0),
               help="Flag frames whose replayed object positions drift further than this from the recording.")
 def replay(raw, profile, out_dir, max_frames, workers, drift_bound_m) -> None:
     """Replay raw recordings into HDF5 episodes under a sensor profile."""
     from episodes.manifest import write_manifest
-    from episodes.stages import raw_to_episode
+    from episodes.replay_batch import replay_recordings
 
     prof = registry.sensor_profile(profile)
     failed, written = [], []
-    with click.progressbar(raw, label=f"replaying under '{profile}'", file=sys.stderr) as paths:
-        for path in paths:
-            try:
-                out = raw_to_episode(path, prof, out_dir, max_frames=max_frames, workers=workers,
-                                     drift_bound_m=drift_bound_m)
-                written.append(out)
-                click.echo(f"\n{path} -> {out}", err=True)
-            except Exception as exc:   # one bad input never stops the others
+    done = replay_recordings(list(raw), prof, out_dir, workers=workers, max_frames=max_frames,
+                             drift_bound_m=drift_bound_m)
+    with click.progressbar(done, length=len(raw), label=f"replaying under '{profile}'", file=sys.stderr) as results:
+        for path, outcome in results:
+            if isinstance(outcome, Exception):    # one bad input never stops the others
                 if cli_errors.show_traceback():
-                    raise
-                failed.append((path, exc))
-                click.echo(f"\nerror: {cli_errors.one_line(exc, path)}", err=True)
+                    click.echo(getattr(outcome, "worker_traceback", ""), err=True)
+                    raise outcome
+                failed.append((path, outcome))
+                click.echo(f"\nerror: {cli_errors.one_line(outcome, path)}", err=True)
+            else:
+                written.append(outcome)
+                click.echo(f"\n{path} -> {outcome}", err=True)
     if written:
         write_manifest(out_dir, updated=written)
     cli_errors.report_batch("recordings", len(raw), failed)

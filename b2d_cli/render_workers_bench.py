@@ -108,3 +108,65 @@ def cold_start_figures(raw_path: Path, profile, workers: int, out_dir: Path, rep
                  "what `b2d replay RAW --workers N` and an executor's render step pay; wall clock, so other "
                  "processes' load counts"),
     }
+
+
+def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: int = 6, repeats: int = 2) -> dict:
+    """`b2d replay` of ``files`` recordings (copies of one, under their own names) three ways: one worker;
+    ``workers`` sharing each recording's render (render helpers, started as the first replay begins);
+    ``workers`` processes replaying whole recordings (episodes/replay_batch.py). Each way starts with no
+    helper or worker process up, as a fresh `b2d replay` does. Wall clock (medians over ``repeats``
+    rounds in rotated order) and every process's CPU seconds (this one's and its children's)."""
+    import resource
+    import shutil
+
+    from episodes.render_pool import close_shared_helpers
+    from episodes.replay_batch import replay_recordings
+
+    raws = []
+    for i in range(files):
+        raws.append(out_dir / "batch_raw" / f"episode_{i:04d}.raw.h5")
+        raws[-1].parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(raw_path, raws[-1])
+
+    def children_cpu() -> float:
+        usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+        return usage.ru_utime + usage.ru_stime
+
+    def run(way: str) -> tuple[float, float, list[str]]:
+        out = out_dir / f"batch_{way}"
+        shutil.rmtree(out, ignore_errors=True)
+        close_shared_helpers()
+        n, file_level = (1, False) if way == "one_worker" else (workers, way == "whole_recordings")
+        t0, cpu0, child0 = time.perf_counter(), time.process_time(), children_cpu()
+        if file_level:
+            done = list(replay_recordings(raws, profile, out, workers=n))
+        else:   # the way before: each recording in turn, its render shared
+            done = [(p, next(iter(replay_recordings([p], profile, out, workers=n)))[1]) for p in raws]
+        close_shared_helpers()       # the helpers' CPU seconds count once they have ended
+        wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0 + children_cpu() - child0
+        failed = [f"{p}: {e}" for p, e in done if isinstance(e, Exception)]
+        if failed:
+            raise RuntimeError(f"batch replay ({way}) failed: {failed}")
+        return wall, cpu, [file_sha256(e) for _, e in done]
+
+    ways = ["one_worker", "render_shared", "whole_recordings"]
+    walls: dict[str, list[float]] = {w: [] for w in ways}
+    cpus: dict[str, list[float]] = {w: [] for w in ways}
+    hashes: dict[str, list[str]] = {}
+    for r in range(repeats):
+        for way in ways[r % 3:] + ways[:r % 3]:
+            wall, cpu, hashes[way] = run(way)
+            walls[way].append(round(wall, 3))
+            cpus[way].append(round(cpu, 3))
+    wall = {w: statistics.median(v) for w, v in walls.items()}
+    return {
+        "files": files, "workers": workers, "repeats": repeats,
+        "wall_s_median": wall, "wall_s": walls, "cpu_s": cpus,
+        "speedup_vs_one_worker": {w: round(wall["one_worker"] / wall[w], 3) for w in ways[1:]},
+        "whole_recordings_vs_render_shared": round(wall["render_shared"] / wall["whole_recordings"], 3),
+        "episodes_identical": len({tuple(h) for h in hashes.values()}) == 1,
+        "note": ("replay + render + assemble of every recording, from no helper or worker process up; "
+                 "render_shared: the recordings in turn, each render shared with helper processes (the only "
+                 "way before stop 35); whole_recordings: each of `workers` processes replays whole recordings; "
+                 "wall clock, so other processes' load counts; cpu_s includes the processes' start-up"),
+    }

@@ -35,7 +35,7 @@ from typing import Iterator
 
 import numpy as np
 
-from episodes.workers import die_with_parent
+from episodes.workers import die_with_parent, one_core
 
 log = logging.getLogger(__name__)
 
@@ -63,12 +63,7 @@ def _take(lock, state, job: int, max_ahead: int) -> int | None:
 
 def _helper_main(index: int, tasks, conn, lock, state, parent_pid: int, max_ahead: int) -> None:
     die_with_parent(parent_pid)
-    # one helper is meant for one core: Mesa's software GL rasterizes on this thread (its default, a
-    # thread per core in every process, oversubscribes the cores), OpenCV on one. Neither changes a byte.
-    os.environ.setdefault("LP_NUM_THREADS", "0")
-    import cv2
-
-    cv2.setNumThreads(1)
+    one_core()      # one helper is meant for one core
     from episodes.replay_frames import ReplayFrames
 
     out = _Sender(conn)

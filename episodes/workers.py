@@ -42,15 +42,34 @@ def _watch(parent_pid: int) -> None:
     threading.Thread(target=poll, name="die-with-parent", daemon=True).start()
 
 
-def map_in_processes(fn: Callable, arguments: Iterable[tuple], processes: int) -> Iterator:
+def one_core() -> None:
+    """Keep this process's rendering on one core, for a process meant for one of several cores: Mesa's
+    software GL rasterizes on the calling thread (its default, a thread per core in every process,
+    oversubscribes the cores), OpenCV on one. Neither changes a byte. Before the first GL context."""
+    os.environ.setdefault("LP_NUM_THREADS", "0")
+    import cv2
+
+    cv2.setNumThreads(1)
+
+
+def start_worker(parent_pid: int, on_start: Callable | None = None) -> None:
+    """Pool initializer: die with the process ``parent_pid``, then run ``on_start()``."""
+    die_with_parent(parent_pid)
+    if on_start is not None:
+        on_start()
+
+
+def map_in_processes(fn: Callable, arguments: Iterable[tuple], processes: int,
+                     on_start: Callable | None = None) -> Iterator:
     """``fn(*args)`` for each of ``arguments``, yielded in their order; with ``processes`` > 1 in that many
-    spawned processes that die with this one (``fn`` must be a module-level function), else here."""
+    spawned processes that die with this one and first run ``on_start()`` (``fn`` and ``on_start`` must be
+    module-level functions), else here."""
     if processes <= 1:
         for args in arguments:
             yield fn(*args)
         return
     with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("spawn"),
-                             initializer=die_with_parent, initargs=(os.getpid(),)) as pool:
+                             initializer=start_worker, initargs=(os.getpid(), on_start)) as pool:
         futures = [pool.submit(fn, *args) for args in arguments]
         for future in futures:
             yield future.result()

@@ -23,6 +23,9 @@ class TaskSpecError(ValueError):
             message += f", got {got!r}"
         super().__init__(message)
 
+    def __reduce__(self):     # rebuilt from its parts when it crosses a process boundary (a worker's error)
+        return type(self), (self.field, self.expected, self.got, self.source), self.__dict__
+
 
 def one_of(names: Iterable[str]) -> str:
     """Format a list of valid names for an error message."""

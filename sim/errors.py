@@ -10,9 +10,13 @@ class SpecError(ValueError):
         self.path = str(path) if path is not None else None
         self.field = field
         self.expected = expected
+        self.got = got
         where = f"{self.path}: " if self.path else ""
         got_text = f" (got {got!r})" if got is not None else ""
         super().__init__(f"{where}field '{field}': expected {expected}{got_text}")
+
+    def __reduce__(self):     # rebuilt from its parts when it crosses a process boundary (a worker's error)
+        return type(self), (self.path, self.field, self.expected, self.got), self.__dict__
 
 
 class UnknownNameError(KeyError):
@@ -24,3 +28,6 @@ class UnknownNameError(KeyError):
 
     def __str__(self) -> str:  # KeyError would otherwise quote the whole message
         return self.args[0]
+
+    def __reduce__(self):
+        return type(self), (self.kind, self.name, self.valid), self.__dict__

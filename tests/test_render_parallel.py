@@ -18,11 +18,7 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task
 from teleop.recorder import record_episode
-
-# Every control step rendered (60 Hz), two small cameras, coarse tactile: 18 frames for the 18-step raw.
-TINY = {"name": "tiny", "rate_hz": 60,
-        "cameras": {"ids": ["chest", "right_wrist"], "width": 32, "height": 24, "modalities": ["rgb", "depth"]},
-        "tactile": {"enabled": True, "resolution": 240, "step": 24}}
+from tiny_profile import TINY
 
 
 def _arrays(path) -> dict[str, bytes]:

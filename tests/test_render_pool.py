@@ -14,12 +14,9 @@ from episodes.render_pool import shared_helpers
 from episodes.replay_frames import ReplayFrames
 from episodes.stages import frame_steps, render_to_file, replay_to_file
 from sim.registry import parse_sensor_profile
+from tiny_profile import TINY as TINY_FIELDS
 
-# every control step a frame (60 Hz): 18 frames of two small cameras and coarse tactile for the 18-step raw
-TINY = parse_sensor_profile({
-    "name": "tiny", "rate_hz": 60,
-    "cameras": {"ids": ["chest", "right_wrist"], "width": 32, "height": 24, "modalities": ["rgb", "depth"]},
-    "tactile": {"enabled": True, "resolution": 240, "step": 24}})
+TINY = parse_sensor_profile(TINY_FIELDS)
 
 
 @pytest.fixture(scope="module")

@@ -23,6 +23,11 @@ class DescriptionError(SpecError):
         else:
             super().__init__(path_or_message, field, expected, got)
 
+    def __reduce__(self):
+        if self.field is None:
+            return type(self), (str(self),), self.__dict__
+        return super().__reduce__()
+
 
 def _expected_error(path, where: str, expected: str, got=None) -> DescriptionError:
     return DescriptionError(path, where, expected, got)

@@ -5,12 +5,7 @@ import shutil
 import pytest
 
 from sim.registry import parse_sensor_profile
-
-# every control step rendered (60 Hz), so the 18-step recording of tests/conftest.py gives 18 frames:
-# enough for two render workers (8 frames each at least)
-TINY = {"name": "tiny", "rate_hz": 60,
-        "cameras": {"ids": ["chest", "right_wrist"], "width": 32, "height": 24, "modalities": ["rgb", "depth"]},
-        "tactile": {"enabled": True, "resolution": 240, "step": 24}}
+from tiny_profile import TINY
 
 
 @pytest.fixture(scope="session")

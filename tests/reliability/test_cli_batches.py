@@ -3,6 +3,7 @@ on past bad inputs and ends with a summary; outputs never overwrite each other s
 outside the expected naming are refused."""
 
 import h5py
+import pytest
 from click.testing import CliRunner
 
 from b2d_cli.main import cli
@@ -17,7 +18,8 @@ def _error_lines(output: str) -> list[str]:
     return [line for line in output.splitlines() if line.startswith("error: ")]
 
 
-def test_a_replay_batch_goes_on_past_bad_inputs_and_refuses_to_overwrite(raw_path, tmp_path):
+@pytest.mark.parametrize("workers", [1, 2])    # 2: whole recordings on two processes, errors passed back
+def test_a_replay_batch_goes_on_past_bad_inputs_and_refuses_to_overwrite(raw_path, tmp_path, workers):
     other = tmp_path / "other" / raw_path.name            # same name, another recording
     other.parent.mkdir()
     other.write_bytes(raw_path.read_bytes())
@@ -31,7 +33,7 @@ def test_a_replay_batch_goes_on_past_bad_inputs_and_refuses_to_overwrite(raw_pat
     out = tmp_path / "out"
 
     result = _invoke("replay", raw_path, other, foreign, truncated, missing, "--profile", "preview",
-                     "--out", out, "--max-frames", 1)
+                     "--out", out, "--max-frames", 1, "--workers", workers)
     assert result.exit_code == 2, result.output
     errors = _error_lines(result.output)
     assert len(errors) == 4, result.output
