@@ -58,11 +58,11 @@ SlideClearance = Annotated[Number, Field(ge=SLIDE_CLEARANCE_RANGE_M[0], le=SLIDE
                                                      f"{SLIDE_CLEARANCE_RANGE_M[1]:g}]")]
 
 
-def _slid_in(clearance, info: ValidationInfo):
-    """slide_clearance_m only with place_from: front (nothing slides in otherwise)."""
+def _slid_in(value, info: ValidationInfo):
+    """slide_clearance_m, slide_fingers_in only with place_from: front (nothing slides in otherwise)."""
     if info.data.get("place_from") != PLACE_FROM_FRONT:
-        raise ValueError(f"no slide_clearance_m without place_from: {PLACE_FROM_FRONT} (nothing slides in)")
-    return clearance
+        raise ValueError(f"no {info.field_name} without place_from: {PLACE_FROM_FRONT} (nothing slides in)")
+    return value
 
 
 def _vector(lengths: tuple[int, ...], words: str):
@@ -274,7 +274,9 @@ class PickStep(PlanStep, GraspFields):
     [grasp_point], [grasp_squeeze_m], [grasp_tips_height_m], [grasp_roll_deg], [after], [wait_s]}: carry an object onto or into `place` (an object,
     or `table` with place_offset the spot on the table top). place_from: front slides it in level through the side a
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor), its bottom
-    slide_clearance_m over the cavity floor as it slides in (default 4 cm).
+    slide_clearance_m over the cavity floor as it slides in (default 4 cm), and with slide_fingers_in: true the
+    hand turned about the vertical on the way so that its fingers point straight in (the arm behind it through the
+    mouth, not across the container's side).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
     object's frame; pinch_fingers [index, middle, ...] are the fingers a pad pinch closes the thumb against
     (default the hand's own set, teleop/pinch_grasp.py), pinch_clear_tips: true spreads it until the fingertips,
@@ -343,6 +345,9 @@ class PickStep(PlanStep, GraspFields):
         return back
     slide_clearance_m: SlideClearance = None
     _slid_in_only = field_validator("slide_clearance_m", mode="before")(_slid_in)
+    # place_from: front: the hand turned about the vertical on the way so its fingers point straight in
+    slide_fingers_in: Bool = False
+    _fingers_in_only = field_validator("slide_fingers_in", mode="before")(_slid_in)
 
     @field_validator("hold", mode="before")
     @classmethod

@@ -8,6 +8,8 @@ stand in the way of a door shut next).
 The opening is found by rays against the container's own walls: its links (a door, open or shut) are
 not walls. The rays start at the cavity's centre raised or lowered to the height of what goes in or
 comes out: a shelf across the cavity's middle (a fridge's) is not in their way there.
+With `slide_fingers_in` (opt-in) the hand turns about the vertical on its way to the opening so that its
+fingers point straight in, and the arm behind it comes through the mouth rather than across the container's side.
 """
 
 from __future__ import annotations
@@ -18,8 +20,9 @@ import mujoco
 import numpy as np
 
 from sim.errors import SpecError
+from sim.scene.reach import PALM_DOWN
 from teleop.geom_rays import body_geoms, nearest_hit
-from teleop.operator_motion import DURATIONS, UP, SideTimeline
+from teleop.operator_motion import DURATIONS, FORWARD, UP, SideTimeline, quat, yawed
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.upright_look import upright_look
 from teleop.transit import bounding_box_points, hand_outline
@@ -119,6 +122,17 @@ def slide_start(place: np.ndarray, way_in: SideOpening, lead: float,
     return back, place + (clearance - RELEASE_GAP_M) * UP
 
 
+FINGERS = PALM_DOWN.T @ FORWARD      # the way the fingers point, wrist-site frame
+
+
+def fingers_in_turn(hand_rot: np.ndarray, out: np.ndarray) -> float:
+    """The turn (radians, about the vertical) that points the hand's fingers (``hand_rot``), seen from
+    above, straight in through an opening facing ``out``."""
+    fingers = hand_rot @ FINGERS
+    turn = np.arctan2(-out[1], -out[0]) - np.arctan2(fingers[1], fingers[0])
+    return float((turn + np.pi) % (2 * np.pi) - np.pi)
+
+
 def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
                           offset: np.ndarray) -> None:
     """The held object ``name`` (its centre ``offset`` from the wrist, world) carried from where the hand
@@ -131,22 +145,31 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     release = front_release(op, data, item, name)
     way_in = side_opening(op, data, item["place"], side["home"][0], rays_at=float(release[2]))
     out = way_in.out
+    R_hand = np.zeros(9)
+    mujoco.mju_quat2Mat(R_hand, tl.frames[-1].quat)
+    R_hand = R_hand.reshape(3, 3)
+    turn, turned = np.eye(3), {}
+    if item.get("slide_fingers_in"):
+        # the hand turned about the vertical on the way so its fingers point straight in: the forearm behind
+        # it comes through the mouth, not across the container's side wall or an open door's edge
+        turn = yawed(np.eye(3), fingers_in_turn(R_hand, out))
+        R_hand, offset = turn @ R_hand, turn @ offset
+        turned = {"quat": quat(R_hand)}
     place = release - offset      # wrist, letting go
     op.leaves(name, place + offset - RELEASE_GAP_M * UP, on=item["place"])
     # how far ahead of the wrist (into the opening) the open or closed hand and the object reach
-    body_pts = bounding_box_points(model, data, op.scene.object_body_ids[name]) - op.object_pos(data, name) + offset
-    R_hand = np.zeros(9)
-    mujoco.mju_quat2Mat(R_hand, tl.frames[-1].quat)
-    hand_pts = hand_outline(side["hand"], item["hand"], tl.frames[-1].hand, side["open"]) @ R_hand.reshape(3, 3).T
+    body_pts = bounding_box_points(model, data, op.scene.object_body_ids[name]) - op.object_pos(data, name)
+    body_pts = body_pts @ turn.T + offset
+    hand_pts = hand_outline(side["hand"], item["hand"], tl.frames[-1].hand, side["open"]) @ R_hand.T
     lead = float(np.max(np.concatenate([body_pts, hand_pts]) @ -out))
     # let go, the open hand rises until its lowest point clears the object's top (the fingers hooked
     # round a bowl's rim drag it back out otherwise), as far as the cavity's ceiling lets it
-    open_pts = hand_outline(side["hand"], item["hand"], side["open"]) @ R_hand.reshape(3, 3).T
+    open_pts = hand_outline(side["hand"], item["hand"], side["open"]) @ R_hand.T
     room = way_in.ceiling - CEILING_GAP_M - float(place[2] + max(open_pts[:, 2].max(), hand_pts[:, 2].max()))
     rise = max(WITHDRAW_RISE_M, min(float(body_pts[:, 2].max() + OFF_TOP_M - open_pts[:, 2].min()), room))
     back, slide = slide_start(place, way_in, lead, slide_clearance(item))
     carry_frame = len(tl.frames)
-    op.set_off(side, data, item, CARRY_STEPS, pos=slide + back * out, carried=(name, offset))
+    op.set_off(side, data, item, CARRY_STEPS, pos=slide + back * out, carried=(name, offset), **turned)
     # outside the opening the operator looks where the object sits in the hand and corrects the rest
     first = len(tl.frames)
     tl.add(SLIDE_STEPS, pos=slide)
@@ -156,7 +179,7 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     tl.add(DURATIONS["retreat"], pos=place + rise * UP + back * out)
     # ... and how it leans: it goes in upright (a bottle handed over hangs in the hand as the giver let it go)
     up = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).T @ UP     # its up as it stood
-    op.on_frame_end(side, first - 1, upright_look(op, side, name, up, R_hand.reshape(3, 3), offset.copy(),
+    op.on_frame_end(side, first - 1, upright_look(op, side, name, up, R_hand, offset.copy(),
                                                   range(first, len(tl.frames)), recentre_when_upright=True))
     op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
     tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
