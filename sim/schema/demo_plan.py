@@ -609,13 +609,14 @@ class StrikeStep(PlanStep, GraspFields):
 
 class CarryStep(PlanStep):
     """{hand: both, carry, place, [place_from], [place_offset], [grasp_height], [toe_in_deg], [return_home],
-    [after], [wait_s]}: both palms squeeze the object from opposite sides and carry it onto/into `place`
+    [approach_over], [after], [wait_s]}: both palms squeeze the object from opposite sides and carry it onto/into `place`
     (place_from and place_offset as for pick: with place_from: front it is slid in level through the
     side a container is open at, a bowl into a microwave); grasp_height (metres from its centre, within
     its half height) is where the palms press; toe_in_deg (default 10) how far each hand's fingers turn in
     towards the object about the vertical, which swings the forearms apart behind it; return_home: true
-    sends both hands back to their home pose after letting go; slide_clearance_m (place_from: front) is
-    the object's bottom over the cavity floor as it slides in (default 4 cm)."""
+    sends both hands back to their home pose after letting go; approach_over: true brings each hand to the
+    object over anything in its way, the place included (the other waits: they squeeze together);
+    slide_clearance_m (place_from: front) is the object's bottom over the cavity floor as it slides in (default 4 cm)."""
 
     hands: ClassVar[tuple[str, ...]] = (BOTH_HANDS,)
 
@@ -629,6 +630,9 @@ class CarryStep(PlanStep):
     toe_in_deg: Number = Field(None, ge=TOE_IN_RANGE_DEG[0], le=TOE_IN_RANGE_DEG[1],
                                description=f"degrees in [{TOE_IN_RANGE_DEG[0]:g}, {TOE_IN_RANGE_DEG[1]:g}]")
     return_home: Bool = False
+    # each hand comes to the object over anything in its way, the place too (teleop/transit.py): straight from
+    # home, a hand crossing to the far side of a ball swept the box it was to go in
+    approach_over: Bool = False
     slide_clearance_m: SlideClearance = None
     _slid_in_only = field_validator("slide_clearance_m", mode="before")(_slid_in)
 

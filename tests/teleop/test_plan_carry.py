@@ -118,3 +118,34 @@ def test_toe_in_turns_the_fingers_in_and_the_wrists_apart():
         assert 9.0 < more < 13.0
         # the palm itself is where it was: only the hand behind it turns
         assert np.allclose(turned[20.0][side].pos, turned[None][side].pos, atol=0.005)
+
+
+def test_approach_over_brings_a_hand_over_the_place_and_the_other_waits():
+    # ball_box_loading's soccer ball on the UR5+Wuji: straight from home, the right hand's fingers, pointing
+    # away from the body, swept the box beside the ball; with approach_over it crosses above the box's top
+    soccer = {"hand": "both", "carry": "soccer_ball", "place": "box", "place_offset": [-0.03, 0.03],
+              "grasp_height": -0.03}
+    scene = demonstration_scene("ball_box_loading", "ur5_wuji", 0)
+    task = scene.task
+    frames = {}
+    for over in (False, True):
+        scope = PlanScope(task.objects, task.zones, task.points)
+        scene.task = dataclasses.replace(task, demo_plan=parse_plan("t.yaml", {"demo_plan": [
+            {**soccer, "approach_over": over}]}, scope))
+        data, op = home_and_plan(scene)
+        frames[over] = {s: op.sides[s]["timeline"].frames for s in ("right", "left")}
+    box_top = op.object_pos(data, "box")[2] + task.objects["box"].half_extents[2]
+    # the squeeze (approach, descend, squeeze, ...; the return home last) is where it was, and both hands
+    # get there at the same step
+    for over in (False, True):
+        assert frames[over]["right"][-10].end_step == frames[over]["left"][-10].end_step
+    for side in ("right", "left"):
+        assert np.allclose(frames[True][side][-10].pos, frames[False][side][-10].pos)
+    # straight: the right hand sets off downwards at once; over: it crosses at a height above the box's top
+    straight, over = frames[False]["right"], frames[True]["right"]
+    assert straight[2].pos[2] < straight[1].pos[2]
+    box_left = op.object_pos(data, "box")[0] - task.objects["box"].half_extents[0]
+    crossed = over[2].pos           # across at its height to over the ball, past the box's left side
+    assert crossed[2] > box_top + 0.05 and crossed[0] < box_left
+    assert over[3].pos[2] < crossed[2]          # then down to where the straight approach ends
+    assert np.allclose(over[3].pos, straight[2].pos)
