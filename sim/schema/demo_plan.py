@@ -297,7 +297,8 @@ class PickStep(PlanStep, GraspFields):
     its release height, release_relax (a fraction) opens the thumb and the pinching fingers from where they
     hold that far towards the open hand, and place_yaw (degrees, world) picks, of the turns that set the object
     square to its target, the one with the tips closing (thumb to fingers) along it, and ease_turned: true turns the
-    slide off the thumb's side with the hand as it is turned square (teleop/plan_steps/flat_place.py).
+    slide off the thumb's side with the hand as it is turned square (teleop/plan_steps/flat_place.py);
+    grasp_yaw_object: true counts a flat pinch's grasp_yaw from the object's own x axis as it lies, not the world's.
     carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s). close_thumb_last:
     true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
     into the fingers' wall). return_home: true sends the hand back to its home pose once it has let go, rather
@@ -334,6 +335,9 @@ class PickStep(PlanStep, GraspFields):
     place_yaw: Number = Field(None, ge=-180.0, le=180.0, description="degrees in [-180, 180]")
     # flat pinch: the ease off the thumb's side turns with the hand as the operator's looks turn it square
     ease_turned: Bool = False
+    # flat pinch: grasp_yaw counted from the object's own x axis as it lies, not from the world's +x (the hand
+    # turns with the object: the tips meet its sides at the same angle however it was left turned)
+    grasp_yaw_object: Bool = False
     # after letting go the hand goes back to its home pose, out of the other arm's way (teleop/plan_steps/pick.py)
     return_home: Bool = False
 
@@ -378,6 +382,14 @@ class PickStep(PlanStep, GraspFields):
     _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", "place_yaw",
                                        "ease_turned", mode="before")(
         _only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
+    _flat_pinch_turn = field_validator("grasp_yaw_object", mode="before")(
+        _only_with_grasp("flat_pinch", "where a flat pinch's grasp_yaw is counted from"))
+
+    @model_validator(mode="after")
+    def _yaw_to_count(self):
+        if self.grasp_yaw_object and ("grasp_yaw" not in self.model_fields_set or self.grasp_yaw == GRASP_YAW_ACROSS):
+            raise ValueError("grasp_yaw_object: true needs grasp_yaw in degrees (counted from the object's x axis)")
+        return self
 
     @field_validator("place", mode="before")
     @classmethod

@@ -82,7 +82,8 @@ def grasp_kind(item: dict) -> str:
     first fingers' pads, for objects too small for the palm; teleop/pinch_grasp.py) or "flat_pinch"
     (the fingertips' pinch for a thin object lying flat: they come down to the table beside it;
     teleop/flat_pinch.py) or "side" (the palm grasp turned thumb up: side_roll). With flat_pinch,
-    `grasp_yaw` in degrees is the direction the tips close along (world, from +x); "across" or none:
+    `grasp_yaw` in degrees is the direction the tips close along (world, from +x; from the object's x axis
+    with `grasp_yaw_object: true`); "across" or none:
     across the object's narrowest horizontal width."""
     return item.get("grasp", "power")
 
@@ -116,8 +117,10 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
         closing = R @ mirror(tip_axis(hand, q_axis))
         if item.get("grasp_yaw", GRASP_YAW_ACROSS) == GRASP_YAW_ACROSS:
             return yawed(R, across_turn(closing, body_rot, obj.half_extents))
-        # degrees: the direction the tips close along (world, from +x), either way round
-        turn = np.radians(item["grasp_yaw"]) - np.arctan2(closing[1], closing[0])
+        # degrees: the direction the tips close along (world, from +x; `grasp_yaw_object`: from the object's x axis
+        # as it lies, so the tips meet its sides at the same angle however it was left turned), either way round
+        start = np.arctan2(body_rot[1, 0], body_rot[0, 0]) if item.get("grasp_yaw_object") else 0.0
+        turn = np.radians(item["grasp_yaw"]) + start - np.arctan2(closing[1], closing[0])
         return yawed(R, float((turn + np.pi / 2) % np.pi - np.pi / 2))
 
     # the object's centre goes where the tips are as far apart as it is wide (through its centre,

@@ -75,8 +75,8 @@ def test_cells_in_two_processes_are_the_cells_in_one():
 
 def test_a_bad_cell_reports_its_error_and_a_named_draft_plan_runs():
     """A cell whose episodes fail (no control step to write) reports each seed's error; the bench goes on.
-    A draft plan (jigsaw_puzzle_assembly's) runs when its task is named, and is left out of 'all'."""
-    draft = "jigsaw_puzzle_assembly"
+    A draft plan (fridge_fruit_shelf_sorting's) runs when its task is named, and is left out of 'all'."""
+    draft = "fridge_fruit_shelf_sorting"
     assert load_task(draft).demo_plan_draft and draft not in recordable_tasks()
     cell = run_cell(draft, OTHER, seeds=2, max_steps=0, dry_run=False)
     assert cell["seeds"] == 2 and cell["successes"] == 0 and len(cell["errors"]) == 2

@@ -26,6 +26,7 @@ SETTINGS = [
     ("fruit_bowl_loading", "ur5_rh56dfx", 7),
     ("frypan_stand_pour", "ur5_schunk", 0),
     ("gaming_desk_setup", "jaka_zu7_dexhand021", 1),
+    ("jigsaw_puzzle_assembly", "iiwa7_sharpa", 0),
     ("medicine_shoebox_pack", "panda_orca", 4),
     ("microwave_bowl_loading", "ur5_schunk", 1),
     ("screwdriver_box_hammer", "ur5_rh56dfx", 0),
