@@ -181,10 +181,12 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     else:
         offset, rotation = holding.offset, holding.rotation
         by_hold = holding.settle is not None
-        if by_hold:             # the hold's look moves the frames up to here too (the wait for `after`)
+        side["timeline"].add(DURATIONS["hold"])     # a frame of its own for the carry to raise (not the hold's)
+        if by_hold:             # the hold's look moves the frames up to here too (the wait for `after`), the
+            # carry's own frame with them: left where the hold was planned, the hand jumped back by the look's
+            # correction (8 cm on a rim-pinched bowl) as the carry set off, and the bowl fell out
             holding.settle[1] = len(side["timeline"].frames)
             item = {**holding.grasp, **item}    # let go as it was taken (a side grasp moves out along the palm's normal)
-        side["timeline"].add(DURATIONS["hold"])     # a frame of its own for the carry to raise (not the hold's)
         if by_hold:             # where it sits in the hand now, before it moves on
             settle = [len(side["timeline"].frames), None]
             op.on_frame_end(side, settle[0] - 1, settle_in_hand(op, side, name, offset, settle,

@@ -60,7 +60,7 @@ def _operator(*steps):
 def test_the_via_point_goes_into_the_pot_and_over_the_bowl_twice():
     """At each stop (the frames the hand stays still in) the ladle's bowl, held as grasped, is over the pot's
     cavity centre VIA_INSIDE_DEPTH_M below its rim, then over the bowl with the ladle's lowest point
-    VIA_OVER_CLEARANCE_M above the bowl's top: inside, over, inside, over."""
+    VIA_OVER_CLEARANCE_M above the bowl's top, each shifted by its stop's `offset`: inside, over, inside, over."""
     scene, data, op = _operator(dict(SCOOP))
     frames = op.sides["right"]["timeline"].frames
     closed = next(f for prev, f in zip(frames, frames[1:])        # the pinch closes there, the wrist still
@@ -76,12 +76,14 @@ def test_the_via_point_goes_into_the_pot_and_over_the_bowl_twice():
     cavity = data.xpos[pot] + data.xmat[pot].reshape(3, 3) @ np.asarray(objects["pot"].interior_offset)
     rim = data.xpos[pot][2] + objects["pot"].half_extents[2]
     lowest = min((rot @ c)[2] for c in _corners(objects["ladle"].half_extents))     # under the ladle's centre
+    dipped, over_bowl = (np.array([*stop.get("offset", [0.0, 0.0]), 0.0][:3]) for stop in SCOOP["via"])   # the plan's shifts
     for inside in points[0::2]:
-        assert np.allclose(inside, [*cavity[:2], rim - VIA_INSIDE_DEPTH_M], atol=1e-9)
+        assert np.allclose(inside, np.array([*cavity[:2], rim - VIA_INSIDE_DEPTH_M]) + dipped, atol=1e-9)
     for over, stay in zip(points[1::2], stays[1::2]):
-        assert np.allclose(over[:2], data.xpos[bowl][:2], atol=1e-9)
+        assert np.allclose(over[:2], data.xpos[bowl][:2] + over_bowl[:2], atol=1e-9)
         bottom = stay.pos[2] + held[2] + lowest
-        assert bottom == pytest.approx(data.xpos[bowl][2] + objects["bowl"].half_extents[2] + VIA_OVER_CLEARANCE_M)
+        assert bottom == pytest.approx(data.xpos[bowl][2] + objects["bowl"].half_extents[2] + VIA_OVER_CLEARANCE_M
+                                       + over_bowl[2])
 
 
 def _corners(half):
@@ -90,7 +92,7 @@ def _corners(half):
 
 def test_a_held_bowl_stays_lifted_in_the_hand_where_planned():
     """`hold: true`: at the end of its step the bowl is held, lifted clear of the table, where the plan puts
-    it (the look once it is lifted: taken from the side, it sits ~8 cm from where the grasp planned it in
+    it (the look once it is lifted: pinched by the rim, it sits ~8 cm from where the grasp planned it in
     the hand), and the operator remembers it in the left hand for the hand's next step (direct joint
     path, seed 0)."""
     scene, data, op = _operator(dict(HOLD))
@@ -102,3 +104,18 @@ def test_a_held_bowl_stays_lifted_in_the_hand_where_planned():
         physics.step_control(scene.model, data, op.act(step, data))
     assert float(data.xpos[bowl][2]) - z0 > 0.03
     assert np.linalg.norm(data.xpos[bowl][:2] - HOLD["place_offset"][:2]) < 0.02
+
+
+def test_the_carry_from_a_hold_sets_off_from_where_the_look_moved_the_hand():
+    """The hand's next pick of a held bowl starts with a frame of its own (the carry raises it): the hold's look
+    moves it with the hold's frames, so the carry sets off from where the hand holds the bowl (left where the
+    hold was planned, the hand jumped back by the look's correction, ~8 cm, and the pinched bowl fell out)."""
+    n = len(_operator(dict(HOLD))[2].sides["left"]["timeline"].frames) - 1    # the hold's frames, then home
+    serve = {"hand": "left", "pick": "bowl", "place": "table", "place_offset": [0.27, -0.22]}
+    scene, data, op = _operator(dict(HOLD), serve)
+    frames = op.sides["left"]["timeline"].frames
+    planned = frames[n - 1].pos.copy()
+    for step in range(frames[n - 1].end_step):
+        physics.step_control(scene.model, data, op.act(step, data))
+    assert np.linalg.norm(frames[n - 1].pos[:2] - planned[:2]) > 0.03      # the look moved the hold
+    assert np.allclose(frames[n].pos[:2], frames[n - 1].pos[:2], atol=1e-9)
