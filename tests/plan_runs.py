@@ -14,6 +14,7 @@ from teleop.scripted_operator import ScriptedOperator
 JIGSAW = ("jigsaw_puzzle_assembly", "iiwa7_sharpa")
 JIGSAW_GREEN = {"hand": "right", "pick": "green_piece", "place": "white_piece", "place_offset": [0.108, -0.008, -0.016],
                 "grasp": "flat_pinch", "grasp_yaw": 90}
+JIGSAW_GREEN_TO_TABLE = {**JIGSAW_GREEN, "place": "table", "place_offset": [0.105, 0.12]}
 
 def rise_through_lift(scene, data, op, name: str, hand: str = "right") -> float:
     """Run the direct joint path until the hand's lift (the first keyframe 10 cm above the one before,

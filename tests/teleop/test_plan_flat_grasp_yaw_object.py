@@ -10,12 +10,11 @@ from sim.errors import SpecError
 from sim.scene.builder import demonstration_scene
 from sim.tasks import load_task, parse_task
 
-from plan_runs import home_and_plan
+from plan_runs import JIGSAW, JIGSAW_GREEN_TO_TABLE, home_and_plan
 from task_files import task_file_with_plan
 
-TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
-PICK = {"hand": "right", "pick": "green_piece", "place": "table", "place_offset": [0.105, 0.12],
-        "grasp": "flat_pinch", "grasp_yaw": 71}
+TASK, EMBODIMENT = JIGSAW
+PICK = {**JIGSAW_GREEN_TO_TABLE, "grasp_yaw": 71}
 
 
 def _raw(step: dict) -> dict:

@@ -11,12 +11,11 @@ from teleop.flat_pinch import flat_pinch_rotation, tip_pinch, tip_points, tip_pr
 from teleop.pinch_grasp import MEET_M, hand_kinematics
 from teleop.transit import hand_outline
 
-from plan_runs import home_and_plan, rise_through_lift
+from plan_runs import JIGSAW, JIGSAW_GREEN_TO_TABLE, home_and_plan, rise_through_lift
 from task_files import task_file_with_plan
 
-TASK, EMBODIMENT = "jigsaw_puzzle_assembly", "iiwa7_sharpa"
-PICK = {"hand": "right", "pick": "green_piece", "place": "table", "place_offset": [0.105, 0.12],
-        "grasp": "flat_pinch", "grasp_yaw": 90}
+TASK, EMBODIMENT = JIGSAW
+PICK = JIGSAW_GREEN_TO_TABLE
 
 
 def _raw(step: dict) -> dict:
