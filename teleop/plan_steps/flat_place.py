@@ -42,7 +42,7 @@ from sim.demo_plan import TABLE_TARGET
 from sim.embodiment.frames import quat_to_mat
 from sim.embodiment.mirror import mirror_vec
 from teleop.flat_pinch import tip_axis, tip_pinch
-from teleop.operator_motion import UP, SideTimeline, quat, yawed
+from teleop.operator_motion import UP, SideTimeline, axis_rotation, quat, yawed
 from teleop.plan_steps.operator import PlanningOperator
 
 LIFTED_M = 0.02         # an object this far above where it lay has been picked up
@@ -97,11 +97,6 @@ def relaxed_release(side: dict, frames: slice, folded: np.ndarray, fraction: flo
     return relax
 
 
-def _rot_z(angle: float) -> np.ndarray:
-    c, s = np.cos(angle), np.sin(angle)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-
-
 def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray,
                carry_frame: int, lower_frame: int, release_hand: np.ndarray) -> None:
     """For a pick with `grasp: flat_pinch` whose carry starts at frame ``carry_frame`` and which
@@ -133,7 +128,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     def turn_ease(turn: float) -> None:
         if ease is None:
             return
-        d = _rot_z(turn) @ ease["d"]
+        d = axis_rotation(UP, turn) @ ease["d"]
         for frame in tl.frames[end - 2:end]:       # ease off, retreat
             frame.pos = frame.pos + d - ease["d"]
         ease["d"] = d
@@ -167,7 +162,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
             return      # not in the hand: nothing to carry
         actual = op.object_pos(now, name) - now.site_xpos[side["wrist_site_id"]]
         turn = turn_to_square(now)
-        turned = _rot_z(turn) @ actual
+        turned = axis_rotation(UP, turn) @ actual
         for frame in tl.frames[carry_frame:end]:
             centre = frame.pos + offset                 # where the plan has the object's centre
             frame.pos = centre - turned
@@ -188,7 +183,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         # the check above the target (same step, just before) has moved these frames across for where
         # it sits: along them the object's centre is each frame's position plus where it sits now, at
         # the plan's height
-        turned = _rot_z(turn) @ actual
+        turned = axis_rotation(UP, turn) @ actual
         for frame in tl.frames[lower_frame:end]:
             centre = frame.pos + np.array([actual[0], actual[1], held["offset"][2] + press])
             frame.pos = centre - turned
