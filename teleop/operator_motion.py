@@ -36,6 +36,11 @@ def yawed(R: np.ndarray, yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ R
 
 
+def yaw_of(R: np.ndarray) -> float:
+    """Turn (radians) of rotation ``R``'s x axis about the vertical, from world x."""
+    return float(np.arctan2(R[1, 0], R[0, 0]))
+
+
 def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
     """Rotation matrix of ``angle`` radians about the unit ``axis``."""
     q, R = np.zeros(4), np.zeros(9)

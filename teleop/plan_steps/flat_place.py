@@ -42,7 +42,7 @@ from sim.demo_plan import TABLE_TARGET
 from sim.embodiment.frames import quat_to_mat
 from sim.embodiment.mirror import mirror_vec
 from teleop.flat_pinch import tip_axis, tip_pinch
-from teleop.operator_motion import UP, SideTimeline, axis_rotation, quat, yawed
+from teleop.operator_motion import UP, SideTimeline, quat, yaw_of, yawed
 from teleop.plan_steps.operator import PlanningOperator
 
 LIFTED_M = 0.02         # an object this far above where it lay has been picked up
@@ -51,11 +51,6 @@ PRESS_M = -0.006        # let go with its centre this far from the release heigh
 EASE_M = 0.02           # after opening, the hand moves this far away from the thumb's side ...
 EASE_UP_M = 0.003       # ... and this far up
 EASE_STEPS = 15
-
-
-def _yaw(R: np.ndarray) -> float:
-    """Turn (radians) of a body's x axis about the vertical, from world x."""
-    return float(np.arctan2(R[1, 0], R[0, 0]))
 
 
 def footprint_period(half_extents) -> float:
@@ -69,7 +64,7 @@ def square_turn(obj_rot: np.ndarray, target_rot: np.ndarray, half_extents) -> fl
     ``obj_rot``) square to a target (``target_rot``): their sides parallel, up to the object's
     footprint symmetry (footprint_period)."""
     period = footprint_period(half_extents)
-    turn = _yaw(target_rot) - _yaw(obj_rot)
+    turn = yaw_of(target_rot) - yaw_of(obj_rot)
     return float((turn + period / 2) % period - period / 2)
 
 
@@ -128,7 +123,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     def turn_ease(turn: float) -> None:
         if ease is None:
             return
-        d = axis_rotation(UP, turn) @ ease["d"]
+        d = yawed(ease["d"], turn)
         for frame in tl.frames[end - 2:end]:       # ease off, retreat
             frame.pos = frame.pos + d - ease["d"]
         ease["d"] = d
@@ -162,7 +157,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
             return      # not in the hand: nothing to carry
         actual = op.object_pos(now, name) - now.site_xpos[side["wrist_site_id"]]
         turn = turn_to_square(now)
-        turned = axis_rotation(UP, turn) @ actual
+        turned = yawed(actual, turn)
         for frame in tl.frames[carry_frame:end]:
             centre = frame.pos + offset                 # where the plan has the object's centre
             frame.pos = centre - turned
@@ -183,7 +178,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
         # the check above the target (same step, just before) has moved these frames across for where
         # it sits: along them the object's centre is each frame's position plus where it sits now, at
         # the plan's height
-        turned = axis_rotation(UP, turn) @ actual
+        turned = yawed(actual, turn)
         for frame in tl.frames[lower_frame:end]:
             centre = frame.pos + np.array([actual[0], actual[1], held["offset"][2] + press])
             frame.pos = centre - turned

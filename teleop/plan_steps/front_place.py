@@ -19,6 +19,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
+from sim.embodiment.frames import quat_to_mat
 from sim.errors import SpecError
 from sim.scene.reach import PALM_DOWN
 from teleop.geom_rays import body_geoms, nearest_hit
@@ -145,9 +146,7 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     release = front_release(op, data, item, name)
     way_in = side_opening(op, data, item["place"], side["home"][0], rays_at=float(release[2]))
     out = way_in.out
-    R_hand = np.zeros(9)
-    mujoco.mju_quat2Mat(R_hand, tl.frames[-1].quat)
-    R_hand = R_hand.reshape(3, 3)
+    R_hand = quat_to_mat(tl.frames[-1].quat)
     turn, turned = np.eye(3), {}
     if item.get("slide_fingers_in"):
         # the hand turned about the vertical on the way so its fingers point straight in: the forearm behind

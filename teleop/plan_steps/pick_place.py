@@ -23,7 +23,7 @@ from sim.physics import CONTROL_HZ
 from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, tips_over_lowest, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
-                                    axis_rotation, pitched_palm_down, quat, yawed)
+                                    axis_rotation, pitched_palm_down, quat, yaw_of, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape, thumb_actuators
 from teleop.pinch_squeeze import squeezed
 from teleop.pinch_tips import tips_clear_preshape
@@ -119,7 +119,7 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
             return yawed(R, across_turn(closing, body_rot, obj.half_extents))
         # degrees: the direction the tips close along (world, from +x; `grasp_yaw_object`: from the object's x axis
         # as it lies, so the tips meet its sides at the same angle however it was left turned), either way round
-        start = np.arctan2(body_rot[1, 0], body_rot[0, 0]) if item.get("grasp_yaw_object") else 0.0
+        start = yaw_of(body_rot) if item.get("grasp_yaw_object") else 0.0
         turn = np.radians(item["grasp_yaw"]) + start - np.arctan2(closing[1], closing[0])
         return yawed(R, float((turn + np.pi / 2) % np.pi - np.pi / 2))
 

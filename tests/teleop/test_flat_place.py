@@ -14,9 +14,9 @@ from sim.scene.sample import demonstration_seed
 from sim.tasks import load_task
 from teleop.demos import OPERATORS
 from teleop.flat_pinch import tip_axis
-from teleop.operator_motion import DURATIONS, yawed
+from teleop.operator_motion import DURATIONS, yaw_of, yawed
 from teleop.plan_steps.pick_place import flat_pinch
-from teleop.plan_steps.flat_place import EASE_M, EASE_STEPS, EASE_UP_M, _yaw, square_turn
+from teleop.plan_steps.flat_place import EASE_M, EASE_STEPS, EASE_UP_M, square_turn
 from teleop.recorder import record_episode
 from plan_runs import home_and_plan
 
@@ -95,4 +95,4 @@ def test_a_jigsaw_piece_is_set_square_beside_the_fixed_one():
     green = rec.object_names.index("green_piece")
     R = quat_to_mat(rec.object_pose[-1, green, 3:])        # xyz + wxyz
     assert R[2, 2] > np.cos(np.radians(3))                          # level
-    assert abs((np.degrees(_yaw(R)) + 45) % 90 - 45) < 10           # square to the white piece (yaw 0)
+    assert abs((np.degrees(yaw_of(R)) + 45) % 90 - 45) < 10           # square to the white piece (yaw 0)
