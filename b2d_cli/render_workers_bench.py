@@ -136,12 +136,12 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
         out = out_dir / f"batch_{way}"
         shutil.rmtree(out, ignore_errors=True)
         close_shared_helpers()
-        n, file_level = (1, False) if way == "one_worker" else (workers, way == "whole_recordings")
         t0, cpu0, child0 = time.perf_counter(), time.process_time(), children_cpu()
-        if file_level:
-            done = list(replay_recordings(raws, profile, out, workers=n))
-        else:   # the way before: each recording in turn, its render shared
-            done = [(p, next(iter(replay_recordings([p], profile, out, workers=n)))[1]) for p in raws]
+        if way == "whole_recordings":
+            done = list(replay_recordings(raws, profile, out, workers=workers))
+        else:   # each recording in turn: alone, or (the way before) its render shared with helpers
+            n = 1 if way == "one_worker" else workers
+            done = [result for raw in raws for result in replay_recordings([raw], profile, out, workers=n)]
         close_shared_helpers()       # the helpers' CPU seconds count once they have ended
         wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0 + children_cpu() - child0
         failed = [f"{p}: {e}" for p, e in done if isinstance(e, Exception)]
