@@ -48,6 +48,7 @@ PRESS_RANGE_M = (0.0, 0.03)      # place_press_m: a flat pinch's object set down
 SQUEEZE_RANGE_M = (0.0, 0.05)   # grasp_squeeze_m: a flat pinch's tips aimed past each other, up to 5 cm
 TIPS_HEIGHT_RANGE_M = (0.0, 0.03)   # grasp_tips_height_m: a flat pinch's closed tips up to 3 cm over the object's bottom
 CARRY_RANGE_S = (0.0, 10.0)     # carry_s: a pick's carry, above 0 and at most 10 s
+OPEN_RANGE_S = (0.0, 3.0)       # open_s: a pick's hand opening over its place before it rises, above 0 and at most 3 s
 TOE_IN_RANGE_DEG = (0.0, 30.0)  # toe_in_deg: a carry's fingers turned in towards the object, level .. 30 degrees
 SLIDE_CLEARANCE_RANGE_M = (0.0, 0.15)   # slide_clearance_m: a front place's object bottom over the cavity floor
 
@@ -299,7 +300,9 @@ class PickStep(PlanStep, GraspFields):
     square to its target, the one with the tips closing (thumb to fingers) along it, and ease_turned: true turns the
     slide off the thumb's side with the hand as it is turned square (teleop/plan_steps/flat_place.py);
     grasp_yaw_object: true counts a flat pinch's grasp_yaw from the object's own x axis as it lies, not the world's.
-    carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s). close_thumb_last:
+    carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s); open_s (seconds)
+    how long the hand opens over the place before it rises (default 1/3 s: fingers wedged on the object open
+    late, and the rising hand lifts it out). close_thumb_last:
     true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
     into the fingers' wall). return_home: true sends the hand back to its home pose once it has let go, rather
     than leaving it risen over the place (where the other arm reaches in next)."""
@@ -330,6 +333,8 @@ class PickStep(PlanStep, GraspFields):
     close_thumb_last: Bool = False
     # seconds the carry from the lift to above the place takes (default 1 s): a long reach, turning as it goes
     carry_s: Number = Field(None, gt=0.0, le=CARRY_RANGE_S[1], description=f"seconds in (0, {CARRY_RANGE_S[1]:g}]")
+    # seconds the hand opens over the place before it rises (default DURATIONS["open"], 1/3 s)
+    open_s: Number = Field(None, gt=0.0, le=OPEN_RANGE_S[1], description=f"seconds in (0, {OPEN_RANGE_S[1]:g}]")
     # flat pinch: of the turns that set the object square to its target, the one with the tips closing (thumb to
     # fingers) nearest this direction (degrees, world, from +x): the tips on the piece's free sides, off the target
     place_yaw: Number = Field(None, ge=-180.0, le=180.0, description="degrees in [-180, 180]")
