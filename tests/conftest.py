@@ -31,3 +31,28 @@ def _stop_signals_stay_default(request):
     if signal.getsignal(signal.SIGTERM) == signal.SIG_IGN:
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         warnings.warn(f"{request.node.nodeid} left SIGTERM ignored; restored")
+
+
+@pytest.fixture
+def edited_task(tmp_path_factory, monkeypatch):
+    """`edit(task, change)`: for this test the catalog serves a copy of the task's file, changed by
+    `change(raw mapping)`, in place of its own (every registry lookup and `load_task` see only the copy).
+    For states the catalog has no example of now, e.g. a draft plan or a task without one."""
+    import yaml
+
+    import sim.registry as registry
+    from sim.tasks import load_task
+
+    folder, real_files, copies = tmp_path_factory.mktemp("tasks"), registry._files, {}
+    monkeypatch.setattr(registry, "_files", lambda kind: {**real_files(kind), **(copies if kind == "tasks" else {})})
+
+    def edit(task: str, change) -> str:
+        raw = yaml.safe_load(registry.catalog_path("tasks", task).read_text())
+        change(raw)
+        copies[task] = folder / f"{task}.yaml"
+        copies[task].write_text(yaml.safe_dump(raw, sort_keys=False))
+        load_task.cache_clear()
+        return task
+
+    yield edit
+    load_task.cache_clear()

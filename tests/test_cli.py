@@ -5,19 +5,21 @@ from click.testing import CliRunner
 import pytest
 
 from b2d_cli.main import cli
-from sim.registry import names, paper_settings
+from sim.registry import paper_settings
 from sim.tasks import has_finished_plan, load_task
 from teleop.demo_bench import not_run
 
 TASK, EMBODIMENT = "citrus_plate_loading", "ur5_rh5dg2"
 
 
-@pytest.fixture
-def unplanned() -> str:
-    """A paper task the scripted operator cannot demonstrate yet (no demo_plan, or only a draft)."""
-    task = next((t for t in names("tasks") if not has_finished_plan(t)), None)
-    if task is None:
-        pytest.skip("every task has a finished demo_plan")
+@pytest.fixture(params=["no plan", "draft plan"])
+def unplanned(request, edited_task) -> str:
+    """A paper task the scripted operator cannot demonstrate: its plan taken out, or marked a draft (every
+    task in the catalog has a finished plan since stop 36)."""
+    change = (lambda raw: raw.pop("demo_plan")) if request.param == "no plan" else \
+        (lambda raw: raw.update(demo_plan_draft=True))
+    task = edited_task("fridge_fruit_shelf_sorting", change)
+    assert not has_finished_plan(task)
     return task
 
 
@@ -38,7 +40,7 @@ def test_list_settings_says_which_can_be_recorded(unplanned):
     recordable = {line.split()[1]: line.split()[-2] for line in lines[1:]}
     draft = {line.split()[1]: line.split()[-1] for line in lines[1:]}
     assert len(lines) == 27 and recordable[TASK] == "yes" and recordable[unplanned] == "no"
-    assert recordable["fridge_fruit_shelf_sorting"] == "no" and draft["fridge_fruit_shelf_sorting"] == "yes"
+    assert draft[unplanned] == ("yes" if load_task(unplanned).demo_plan else "no")
 
 
 def test_unknown_name_is_a_clear_error(tmp_path):

@@ -58,10 +58,12 @@ def test_only_tasks_with_a_finished_demo_plan_are_recordable():
     assert {"citrus_plate_loading", "condiment_box_loading", "canned_food_tray_arrangement"} <= set(recordable)
 
 
-def test_a_draft_plan_is_checked_but_not_recordable():
+def test_a_draft_plan_is_checked_but_not_recordable(edited_task):
     """A plan kept to work on (`demo_plan_draft: true`) is validated like any other and left out of the
-    recordable settings, the pipeline's partitions and `b2d list settings`' recordable column."""
-    task = load_task("fridge_fruit_shelf_sorting")
+    recordable settings, the pipeline's partitions and `b2d list settings`' recordable column. The catalog
+    has no draft left (fridge_fruit_shelf_sorting's became recordable at stop 36): its plan stands in, marked
+    a draft here."""
+    task = load_task(edited_task("fridge_fruit_shelf_sorting", lambda raw: raw.update(demo_plan_draft=True)))
     assert task.demo_plan and task.demo_plan_draft
     setting = next(s for s in paper_settings() if s.task == task.name)
     assert setting.available and not is_recordable(setting)

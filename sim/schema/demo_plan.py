@@ -548,7 +548,8 @@ class TurnStep(PlanStep):
     speed (m/s) is how fast the hand's contact moves along the arc (default 0.09); return_home: false leaves
     the hand risen off the link where it let go, so the next step sets off from there; approach_over: true
     brings the hand to the link from above its top; withdraw_past_end: true takes the hand, once it lets go,
-    out along the link past its free end before it goes on (round that end, not over the link)."""
+    out along the link past its free end before it goes on (round that end, not over the link: with home on the
+    link's other side, round the end to that side first)."""
 
     turn: Name
     to: Number
@@ -564,7 +565,8 @@ class TurnStep(PlanStep):
     # outer side: the hand rises over it rather than through it)
     approach_over: Bool = False
     # true: after letting go the hand moves out along the link past its free end, and goes on from there round
-    # that end rather than rising over the link (the arm behind a hand outside a tall door lies across its top)
+    # that end rather than rising over the link (the arm behind a hand outside a tall door lies across its top);
+    # home on the link's other side, it turns round the end to that side before it goes home
     withdraw_past_end: Bool = False
 
     @field_validator("turn", mode="before")

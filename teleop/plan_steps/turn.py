@@ -22,7 +22,9 @@ A lid let go below vertical at that handoff falls back; with `palm_look` (opt-in
 and the operator looks where the link is as the hand moves in under it, comes up to it and presses, and
 turns the palm's keyframes about the hinge to it (`palm_look`).
 With `withdraw_past_end` (opt-in) the hand, once it lets go, moves level out along the link past its free end
-and goes on from there, rather than rising over the link (the arm behind it would lie across a tall door's top).
+and goes on from there, rather than rising over the link (the arm behind it would lie across a tall door's top);
+with home on the link's other side it first turns round that end, past it, until it is wholly on home's side
+(straight home from past the end, the fingers crossed a door pulled open past square and shoved it back).
 """
 
 from __future__ import annotations
@@ -62,6 +64,8 @@ UPRIGHT_AXIS_COS = 0.5        # a hinge axis within 60 degrees of vertical is up
 LOOK_BACK_OFF_M = 0.1         # with palm_look the fingertips back this far off the face: clear of the link as it falls back
 LOOKS = 3                     # palm_look: the operator looks as the hand sets off under the face, up to it, and presses
 EDGE_TOL_M = 0.01             # corners of the handle part this close to its farthest reach make up a free edge
+ROUND_STEP_RAD = 0.1          # withdraw_past_end: the hand goes round the link's free end in keyframes this far apart
+ROUND_MAX_RAD = 1.6           # ... and at most this far round the hinge
 
 
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
@@ -198,7 +202,13 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         out = link.radial(link.rotated(faces[radii[-1]], arc[-1] - start))
         inner = float(np.min(hand_outline(side["hand"], item["hand"], side["open"]) @ R.T @ out))
         beyond = link.reach() + CLEARANCE_M - float(link.radial_vec(pos) @ out) - inner
-        tl.add(DURATIONS["lift"], pos=pos + max(0.0, beyond) * out)
+        pos = pos + max(0.0, beyond) * out
+        tl.add(DURATIONS["lift"], pos=pos)
+        # the hand pulled from the side the link swings to, or pushed from the other
+        hand_side = way if pull else -way
+        for pos_round, R_round, steps in round_end(link, target - link.angle, out, hand_side, side, item["hand"],
+                                                   pos, R, arc_step_m):
+            tl.add(steps, pos=pos_round, quat=quat(R_round))
     else:
         tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
     # back to where the hand rests: the arm leaves the pose it stretched into around the link; unless
@@ -208,6 +218,34 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         # over whatever is in the way, the link as it was left included (a tall door pulled open past
         # square stands between the hand and home: teleop/transit.py)
         op.set_off_home(side, data)
+
+
+def round_end(link: "Hinge", turned: float, out: np.ndarray, hand_side: float, side: dict, hand: str,
+              pos: np.ndarray, R: np.ndarray, step_m: float) -> list[tuple[np.ndarray, np.ndarray, int]]:
+    """With `withdraw_past_end`: the keyframes (wrist, hand frame, steps) that take the hand, past the free end
+    of ``link`` (turned by ``turned`` from where the scene has it, reaching along ``out`` from its hinge) at
+    ``pos``, on the link's ``hand_side`` (+1: the side its points move to as the joint grows), round that end
+    to the other side when home lies there, turning with it about the hinge (every point of the hand stays
+    as far from the axis, all past the end), until the whole hand is CLEARANCE_M beyond the link on that
+    side; none when home is on the hand's side. From there the way home does not cross the link (a door
+    pulled open past square, between the hand and home)."""
+    corners = np.array([link.rotated(c, turned) for g in link.geoms for c in link._corners(g)])
+    normal = np.cross(link.axis, out)           # off the plane through the hinge and ``out``: hand_side +1
+    home_side = np.sign(float(normal @ (side["home"][0] - link.anchor)))
+    if home_side == hand_side:
+        return []
+    face = float(np.max(home_side * (corners - link.anchor) @ normal))   # how far the link reaches on home's side
+    outline = hand_outline(side["hand"], hand, side["open"])
+    frames, angle = [], 0.0
+    while angle < ROUND_MAX_RAD:
+        angle += ROUND_STEP_RAD
+        turn = axis_rotation(link.axis, home_side * angle)
+        wrist, R_now = link.anchor + turn @ (pos - link.anchor), turn @ R
+        steps = max(1, int(np.ceil(ROUND_STEP_RAD * np.linalg.norm(link.radial_vec(pos)) / step_m)))
+        frames.append((wrist, R_now, steps))
+        if np.min(home_side * (wrist + outline @ R_now.T - link.anchor) @ normal) >= face + CLEARANCE_M:
+            break
+    return frames
 
 
 def palm_look(op: PlanningOperator, side: dict, link: "Hinge", joint: str, palm_frames: dict[int, float],

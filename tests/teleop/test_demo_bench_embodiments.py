@@ -73,14 +73,17 @@ def test_cells_in_two_processes_are_the_cells_in_one():
     assert without_time(two) == without_time(one) and two["table"] == one["table"]
 
 
-def test_a_bad_cell_reports_its_error_and_a_named_draft_plan_runs():
-    """A cell whose episodes fail (no control step to write) reports each seed's error; the bench goes on.
-    A draft plan (fridge_fruit_shelf_sorting's) runs when its task is named, and is left out of 'all'."""
-    draft = "fridge_fruit_shelf_sorting"
-    assert load_task(draft).demo_plan_draft and draft not in recordable_tasks()
-    cell = run_cell(draft, OTHER, seeds=2, max_steps=0, dry_run=False)
+def test_a_bad_cell_reports_its_error():
+    """A cell whose episodes fail (no control step to write) reports each seed's error; the bench goes on."""
+    cell = run_cell(TASK, OTHER, seeds=2, max_steps=0, dry_run=False)
     assert cell["seeds"] == 2 and cell["successes"] == 0 and len(cell["errors"]) == 2
     assert all("at least one control step" in e for e in cell["errors"])
+
+
+def test_a_named_draft_plan_runs(edited_task):
+    """A draft plan (`demo_plan_draft: true`) runs when its task is named, and is left out of 'all'."""
+    draft = edited_task("fridge_fruit_shelf_sorting", lambda raw: raw.update(demo_plan_draft=True))
+    assert load_task(draft).demo_plan_draft and draft not in recordable_tasks()
     result = run_cross_embodiment_bench([draft], [OTHER], seeds=1, max_steps=2)
     assert result["without_plan"] == [] and len(result["cells"]) == 1 and not result["cells"][0]["errors"]
 

@@ -22,6 +22,7 @@ SETTINGS = [
     ("canned_food_tray_arrangement", "iiwa7_sharpa", 11),
     ("condiment_box_loading", "ur5_wuji", 0),
     ("faucet_cup_water_fill", "rm65_revo2", 0),
+    ("fridge_fruit_shelf_sorting", "ur5_shadow", 0),
     ("fridge_wine_interhand_pour", "ur5_rh5dg2", 0),
     ("fruit_bowl_loading", "ur5_rh56dfx", 7),
     ("frypan_stand_pour", "ur5_schunk", 0),
