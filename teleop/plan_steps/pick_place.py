@@ -377,7 +377,7 @@ def carry_steps(item: dict) -> int:
     DURATIONS["carry"]. A long reach, the hand turning as it goes, takes a person longer; at the
     default second the IIWA7's wrist lagged its plan by up to 0.9 rad carrying a jigsaw piece to the
     far side of the table, and the piece swung out of the fingertips."""
-    return DURATIONS["carry"] if item.get("carry_s") is None else max(1, round(float(item["carry_s"]) * CONTROL_HZ))
+    return steps_of_seconds(item, "carry_s", DURATIONS["carry"])
 
 
 def open_steps(item: dict) -> int:
@@ -385,7 +385,12 @@ def open_steps(item: dict) -> int:
     DURATIONS["open"]. Fingers wedged on the object open late: the RH56DFX's index and little fingers, either
     side of a 6.4 cm jar held from above, were still closed on it a third of a second after the open began, and
     the rising hand lifted it out of the tray and tipped it over (canned_food_tray_arrangement)."""
-    return DURATIONS["open"] if item.get("open_s") is None else max(1, round(float(item["open_s"]) * CONTROL_HZ))
+    return steps_of_seconds(item, "open_s", DURATIONS["open"])
+
+
+def steps_of_seconds(item: dict, field: str, default_steps: int) -> int:
+    """Control steps of an optional duration field given in seconds (at least one), else ``default_steps``."""
+    return default_steps if item.get(field) is None else max(1, round(float(item[field]) * CONTROL_HZ))
 
 
 def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, offset: np.ndarray) -> None:

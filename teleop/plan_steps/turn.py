@@ -206,8 +206,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         tl.add(DURATIONS["lift"], pos=pos)
         # the hand pulled from the side the link swings to, or pushed from the other
         hand_side = way if pull else -way
-        for pos_round, R_round, steps in round_end(link, target - link.angle, out, hand_side, side, item["hand"],
-                                                   pos, R, arc_step_m):
+        for pos_round, R_round, steps in round_end(link, target, out, hand_side, side, item["hand"], pos, R, arc_step_m):
             tl.add(steps, pos=pos_round, quat=quat(R_round))
     else:
         tl.add(DURATIONS["lift"], pos=pos + APPROACH_HEIGHT_M * UP)
@@ -220,28 +219,28 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         op.set_off_home(side, data)
 
 
-def round_end(link: "Hinge", turned: float, out: np.ndarray, hand_side: float, side: dict, hand: str,
+def round_end(link: "Hinge", angle: float, out: np.ndarray, hand_side: float, side: dict, hand: str,
               pos: np.ndarray, R: np.ndarray, step_m: float) -> list[tuple[np.ndarray, np.ndarray, int]]:
     """With `withdraw_past_end`: the keyframes (wrist, hand frame, steps) that take the hand, past the free end
-    of ``link`` (turned by ``turned`` from where the scene has it, reaching along ``out`` from its hinge) at
+    of ``link`` (at joint ``angle``, reaching along ``out`` from its hinge) at
     ``pos``, on the link's ``hand_side`` (+1: the side its points move to as the joint grows), round that end
     to the other side when home lies there, turning with it about the hinge (every point of the hand stays
     as far from the axis, all past the end), until the whole hand is CLEARANCE_M beyond the link on that
     side; none when home is on the hand's side. From there the way home does not cross the link (a door
     pulled open past square, between the hand and home)."""
-    corners = np.array([link.rotated(c, turned) for g in link.geoms for c in link._corners(g)])
+    corners = link.corners(angle)
     normal = np.cross(link.axis, out)           # off the plane through the hinge and ``out``: hand_side +1
     home_side = np.sign(float(normal @ (side["home"][0] - link.anchor)))
     if home_side == hand_side:
         return []
     face = float(np.max(home_side * (corners - link.anchor) @ normal))   # how far the link reaches on home's side
     outline = hand_outline(side["hand"], hand, side["open"])
-    frames, angle = [], 0.0
-    while angle < ROUND_MAX_RAD:
-        angle += ROUND_STEP_RAD
-        turn = axis_rotation(link.axis, home_side * angle)
+    steps = max(1, int(np.ceil(ROUND_STEP_RAD * np.linalg.norm(link.radial_vec(pos)) / step_m)))   # each keyframe's
+    frames, rounded = [], 0.0
+    while rounded < ROUND_MAX_RAD:
+        rounded += ROUND_STEP_RAD
+        turn = axis_rotation(link.axis, home_side * rounded)
         wrist, R_now = link.anchor + turn @ (pos - link.anchor), turn @ R
-        steps = max(1, int(np.ceil(ROUND_STEP_RAD * np.linalg.norm(link.radial_vec(pos)) / step_m)))
         frames.append((wrist, R_now, steps))
         if np.min(home_side * (wrist + outline @ R_now.T - link.anchor) @ normal) >= face + CLEARANCE_M:
             break
@@ -327,7 +326,11 @@ class Hinge:
 
     def top(self, angle: float) -> float:
         """The link's highest point (world z) at joint ``angle``."""
-        return max(float(self.rotated(c, angle - self.angle)[2]) for g in self.geoms for c in self._corners(g))
+        return float(self.corners(angle)[:, 2].max())
+
+    def corners(self, angle: float) -> np.ndarray:
+        """[K, 3] world corners of the link's geoms' boxes at joint ``angle``."""
+        return np.array([self.rotated(c, angle - self.angle) for g in self.geoms for c in self._corners(g)])
 
     def radial_vec(self, p: np.ndarray) -> np.ndarray:
         """From the hinge axis to ``p``, perpendicular to it."""
