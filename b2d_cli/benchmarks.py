@@ -159,8 +159,13 @@ def _bench_replay(profile_name: str, steps: int, workers: int, setting: str | No
         stored = _bytes_by_modality(tmp / "episode_e.hdf5")
         parallel = {}
         if workers > 1:
-            from b2d_cli.render_workers_bench import batch_figures, cold_start_figures, parallel_render_figures
+            from b2d_cli.render_workers_bench import (batch_figures, cold_start_figures, parallel_render_figures,
+                                                      side_by_side_figures)
             parallel = parallel_render_figures(tmp / "e.replay.h5", profile, workers, tmp)
+            parallel["independent_renders_side_by_side"] = side_by_side_figures(tmp / "e.replay.h5", profile,
+                                                                                workers, tmp)
+            parallel["speedup_share_of_ceiling"] = round(
+                parallel["speedup_vs_one_worker"] / parallel["independent_renders_side_by_side"]["ceiling_speedup"], 3)
             parallel["one_file_in_a_fresh_process"] = cold_start_figures(raw, profile, workers, tmp)
             parallel["a_batch_of_recordings"] = batch_figures(raw, profile, workers, tmp)
         comparison = _tessellation_comparison(tmp / "e.replay.h5", profile) if profile.tessellation else {}

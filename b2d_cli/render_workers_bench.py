@@ -9,14 +9,17 @@ renders alternate, so both see the same load.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import statistics
+import threading
 import time
 from pathlib import Path
 
 from episodes.atomic import file_sha256
 from episodes.render_pool import shared_helpers
 from episodes.stages import render_to_file
+from episodes.workers import die_with_parent, one_core
 
 
 def parallel_render_figures(replay_path: Path, profile, workers: int, out_dir: Path, repeats: int = 3) -> dict:
@@ -170,3 +173,72 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
                  "way before stop 35); whole_recordings: each of `workers` processes replays whole recordings; "
                  "wall clock, so other processes' load counts; cpu_s includes the processes' start-up"),
     }
+
+
+WAIT_S = 600.0      # a side-by-side process that sends nothing for this long has failed
+
+
+def side_by_side_figures(replay_path: Path, profile, workers: int, out_dir: Path, repeats: int = 3) -> dict:
+    """What the cores allow any split of one render: the same file rendered whole by this process alone,
+    against `workers` processes each rendering it whole at the same moment (this one and `workers` - 1
+    spawned ones, started and warmed up first). Nothing is shared, so whatever slows them down together
+    is the machine's (cores contending for caches and memory, or vCPUs that share a physical core):
+    `ceiling_speedup` = `workers` x the time alone over the time together, the best a render split over
+    that many processes can reach here. Wall clock, medians over `repeats` alternating rounds."""
+    ctx = multiprocessing.get_context("spawn")
+    start, results = ctx.Barrier(workers), ctx.Queue()
+    others = [ctx.Process(target=_render_when_started, name=f"b2d-side-by-side-{k}", daemon=True,
+                          args=(replay_path, profile, out_dir / f"side_{k}.render.h5", start, results, repeats,
+                                os.getpid()))
+              for k in range(1, workers)]
+    for process in others:
+        process.start()
+    try:
+        render_to_file(replay_path, profile, out_dir / "side_0.render.h5", max_frames=8)    # warm, as they are
+        for _ in others:
+            results.get(timeout=WAIT_S)       # each has imported, started GL and rendered a few frames
+        alone, together = [], []
+        for r in range(repeats):
+            for way in (("alone", "together") if r % 2 == 0 else ("together", "alone")):
+                if way == "together":
+                    start.wait()
+                t0 = time.perf_counter()
+                render_to_file(replay_path, profile, out_dir / "side_0.render.h5")
+                wall = time.perf_counter() - t0
+                if way == "alone":
+                    alone.append(round(wall, 3))
+                else:
+                    together.append(round(max([wall] + [results.get(timeout=WAIT_S) for _ in others]), 3))
+    finally:
+        start.abort()       # a process still waiting for a round (this one failed) stops waiting
+        for process in others:
+            process.join(timeout=60)
+            if process.is_alive():
+                process.kill()
+    ratio = statistics.median(together) / statistics.median(alone)
+    hashes = {file_sha256(out_dir / f"side_{k}.render.h5") for k in range(workers)}
+    return {
+        "workers": workers, "repeats": repeats, "wall_s_alone": alone, "wall_s_together": together,
+        "render_files_identical": len(hashes) == 1,
+        "together_vs_alone": round(ratio, 3), "ceiling_speedup": round(workers / ratio, 3),
+        "note": ("the same render file made whole by one process alone, and by `workers` processes at once "
+                 "(the slowest of them); nothing passes between them, so ceiling_speedup is the best any split "
+                 "of one render over that many processes can reach on these cores"),
+    }
+
+
+def _render_when_started(replay_path: Path, profile, out_path: Path, start, results, rounds: int,
+                         parent_pid: int) -> None:
+    """A side-by-side process: warm up, then render the whole file once per round as the barrier opens."""
+    die_with_parent(parent_pid)
+    one_core()
+    render_to_file(replay_path, profile, out_path, max_frames=8)
+    results.put(0.0)
+    for _ in range(rounds):
+        try:
+            start.wait()
+        except threading.BrokenBarrierError:     # the benchmark failed: nothing more to render
+            return
+        t0 = time.perf_counter()
+        render_to_file(replay_path, profile, out_path)
+        results.put(time.perf_counter() - t0)

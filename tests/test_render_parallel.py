@@ -189,3 +189,17 @@ def test_the_hand_model_is_recorded_and_replay_rebuilds_it(raw_path, tmp_path, m
     episode = raw_to_episode(raw_path, profile, tmp_path / "out", max_frames=2)
     with h5py.File(episode) as f:
         assert json.loads(f["meta/collection_config"][()])["hand_model"] == "generated"
+
+
+def test_side_by_side_ceiling_renders_the_same_file_in_each_process(replay_path, tmp_path):
+    """`b2d bench replay --workers N` measures what the cores allow: N independent whole renders at once
+    against one alone; each process's file is the one-worker file."""
+    from b2d_cli.render_workers_bench import side_by_side_figures
+
+    out = side_by_side_figures(replay_path, parse_sensor_profile(TINY), 2, tmp_path, repeats=1)
+    assert out["render_files_identical"] is True
+    assert len(out["wall_s_alone"]) == len(out["wall_s_together"]) == 1
+    assert out["ceiling_speedup"] == pytest.approx(2 / out["together_vs_alone"], rel=0.01)
+    one = render_to_file(replay_path, parse_sensor_profile(TINY), tmp_path / "one.render.h5")
+    assert one["frames"] == 18
+    assert _arrays(tmp_path / "one.render.h5") == _arrays(tmp_path / "side_1.render.h5")
