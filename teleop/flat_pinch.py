@@ -70,11 +70,12 @@ def tip_points(hand_name: str, fingers: tuple[str, ...], q: np.ndarray) -> np.nd
 
 
 @functools.lru_cache(maxsize=None)
-def tip_pinch(hand_name: str) -> TipPinch:
+def tip_pinch(hand_name: str, fingers: tuple[str, ...] | None = None) -> TipPinch:
     """The thumb's tip brought onto the pad pinch's fingers' tips, from the pad pinch's closed shape
-    (the nearest natural start), the other fingers folded away as there."""
+    (the nearest natural start), the other fingers folded away as there. ``fingers`` (a plan step's
+    `pinch_fingers`): the pad pinch with that set (default the hand's own, teleop/pinch_grasp.py)."""
     kin = hand_kinematics(hand_name)
-    pads = pinch_grasp(hand_name)
+    pads = pinch_grasp(hand_name, fingers) if fingers else pinch_grasp(hand_name)
     fingers = pads.fingers
     thumb, tips = pinch_rows(hand_name, fingers)
     moving, folded = moving_and_folded(kin, [thumb, *tips])
@@ -103,11 +104,12 @@ def tip_pinch(hand_name: str) -> TipPinch:
     return TipPinch(close=q, gap_m=q_gap, fingers=fingers, moving=moving)
 
 
-def tip_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float) -> tuple[np.ndarray, np.ndarray]:
+def tip_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float,
+                 fingers: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """As ``pinch_preshape`` for the tips: the actuator targets on the way from ``open_`` to
     ``close`` as closed as possible with the thumb's tip ``width_m`` from every finger's, and the
     point midway between the thumb's tip and the fingers' there (wrist-site frame, right hand)."""
-    fingers = tip_pinch(hand_name).fingers
+    fingers = tip_pinch(hand_name, fingers).fingers
     for s in np.linspace(1.0, 0.0, 21):
         q = open_ + s * (close - open_)
         P = tip_points(hand_name, fingers, q)
@@ -116,17 +118,18 @@ def tip_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: 
     return q, 0.5 * (P[0] + P[1:].mean(axis=0))
 
 
-def tip_axis(hand_name: str, q: np.ndarray) -> np.ndarray:
+def tip_axis(hand_name: str, q: np.ndarray, fingers: tuple[str, ...] | None = None) -> np.ndarray:
     """Unit vector from the thumb's tip to the fingers' tips at ``q`` (wrist-site frame, right hand)."""
-    P = tip_points(hand_name, tip_pinch(hand_name).fingers, q)
+    P = tip_points(hand_name, tip_pinch(hand_name, fingers).fingers, q)
     axis = P[1:].mean(axis=0) - P[0]
     return axis / np.linalg.norm(axis)
 
 
-def tips_over_lowest(hand_name: str, side: str, q: np.ndarray, R: np.ndarray, outline_q: np.ndarray | None = None) -> float:
+def tips_over_lowest(hand_name: str, side: str, q: np.ndarray, R: np.ndarray, outline_q: np.ndarray | None = None,
+                     fingers: tuple[str, ...] | None = None) -> float:
     """How high the thumb's and the pinching fingers' lowest tip at actuator targets ``q`` is over the hand's
     lowest point at ``outline_q`` (default ``q``), the hand turned ``R`` (world from wrist site)."""
-    tips = tip_points(hand_name, tip_pinch(hand_name).fingers, q)
+    tips = tip_points(hand_name, tip_pinch(hand_name, fingers).fingers, q)
     tips = tips @ M if side == "left" else tips
     lowest = hand_outline(hand_name, side, q if outline_q is None else outline_q)
     return float((tips @ R.T)[:, 2].min() - (lowest @ R.T)[:, 2].min())
@@ -138,17 +141,17 @@ def _turned(pitch_deg: float, roll_deg: float) -> np.ndarray:
     return axis_rotation(fingers, np.radians(roll_deg)) @ R
 
 
-def flat_pinch_rotation(hand_name: str, side: str, ready: np.ndarray) -> np.ndarray:
+def flat_pinch_rotation(hand_name: str, side: str, ready: np.ndarray, fingers: tuple[str, ...] | None = None) -> np.ndarray:
     """The hand's rotation (world from wrist site, before any yaw) for a flat pinch: of the pitches
     and the rolls about the fingers, the one that brings every tip of the spread hand (``ready``)
     nearest to the bottom of the hand."""
-    return _flat_pinch_rotation(hand_name, side, tuple(np.round(ready, 6)))
+    return _flat_pinch_rotation(hand_name, side, tuple(np.round(ready, 6)), fingers)
 
 
 @functools.lru_cache(maxsize=None)
-def _flat_pinch_rotation(hand_name: str, side: str, ready: tuple) -> np.ndarray:
+def _flat_pinch_rotation(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None) -> np.ndarray:
     q = np.array(ready)
-    tips = tip_points(hand_name, tip_pinch(hand_name).fingers, q)
+    tips = tip_points(hand_name, tip_pinch(hand_name, fingers).fingers, q)
     tips = tips @ M if side == "left" else tips
     outline = hand_outline(hand_name, side, q)
     base = hand_kinematics(hand_name).hand.wrist_site.to_local(np.zeros(3))

@@ -21,14 +21,16 @@ from teleop.flat_pinch import tip_pinch, tip_points
 FD_STEP = 1e-5      # rad: finite-difference step of the tips' Jacobian
 
 
-def squeezed(hand_name: str, close: np.ndarray, ready: np.ndarray, depth_m: float) -> np.ndarray:
+def squeezed(hand_name: str, close: np.ndarray, ready: np.ndarray, depth_m: float,
+             fingers: tuple[str, ...] | None = None) -> np.ndarray:
     """Actuator targets (hand order) ``depth_m`` metres of thumb-to-fingers' tip travel past ``close``
     along the pinch axis (from the thumb's tip to the fingers' at ``ready``), moving only the pinch's
-    joints, by the minimum-norm step; not yet clipped to the actuator ranges."""
+    joints, by the minimum-norm step; not yet clipped to the actuator ranges. ``fingers``: the tips' pinch set
+    (a plan step's `pinch_fingers`; default the hand's own)."""
     close = np.asarray(close, float)
     if depth_m <= 0.0:
         return close.copy()
-    pinch = tip_pinch(hand_name)
+    pinch = tip_pinch(hand_name, fingers)
     fingers = pinch.fingers
     P = tip_points(hand_name, fingers, ready)
     axis = P[1:].mean(axis=0) - P[0]

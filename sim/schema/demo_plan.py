@@ -209,7 +209,7 @@ class GraspFields(CatalogModel):
                                                    f"{APPROACH_PITCH_RANGE_DEG[1]:g}]")
     grasp_yaw: Number | Literal["across"] = 0.0     # checked whole by _yaw
     grasp_point: ObjectPoint = None
-    # a pad pinch's fingers against the thumb (default the hand's own choice: teleop/pinch_grasp.py)
+    # a pad pinch's fingers against the thumb, or a flat pinch's tips' (default the hand's own choice: teleop/pinch_grasp.py)
     pinch_fingers: Annotated[list[Literal[PINCH_FINGERS]], Field(min_length=1)] = None
     # a flat pinch's closed tips aimed this far past each other: a firmer hold (teleop/pinch_squeeze.py)
     grasp_squeeze_m: Number = Field(None, ge=SQUEEZE_RANGE_M[0], le=SQUEEZE_RANGE_M[1],
@@ -245,8 +245,12 @@ class GraspFields(CatalogModel):
             raise ValueError(words)
         return yaw
 
-    _pad_pinch_only = field_validator("pinch_fingers", mode="before")(
-        _only_with_grasp("pinch", "the fingers the thumb's pad closes against"))
+    @field_validator("pinch_fingers", mode="before")
+    @classmethod
+    def _a_pinch_only(cls, fingers, info: ValidationInfo):
+        if info.data.get("grasp") not in ("pinch", "flat_pinch"):
+            raise ValueError("no pinch_fingers without grasp: pinch or flat_pinch (the fingers the thumb closes against)")
+        return fingers
     _flat_pinch_only = field_validator("grasp_squeeze_m", mode="before")(
         _only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
     _flat_pinch_tips_height = field_validator("grasp_tips_height_m", mode="before")(

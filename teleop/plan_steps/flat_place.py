@@ -76,13 +76,13 @@ def turn_toward(turn: float, period: float, heading: float, place_yaw: float) ->
     return min(turns, key=lambda t: abs((heading + t - place_yaw + np.pi) % (2 * np.pi) - np.pi))
 
 
-def relaxed_release(side: dict, frames: slice, folded: np.ndarray, fraction: float):
+def relaxed_release(side: dict, frames: slice, folded: np.ndarray, fraction: float, fingers: tuple[str, ...] | None = None):
     """A look (on_frame_end) as the hand lets go: the thumb and the pinching fingers open from the joint
     positions they hold at, ``fraction`` of the way to the open hand, for the keyframes ``frames`` (open,
     ease off, retreat); the other fingers stay ``folded``. A person relaxes a grip rather than opening to a
     shape: the held tips sit centimetres from where the pre-shape puts them, and opening to it swept them
     across the piece."""
-    pinching = tip_pinch(side["hand"]).moving
+    pinching = tip_pinch(side["hand"], fingers).moving
 
     def relax(now: mujoco.MjData) -> None:
         held = np.asarray(now.actuator_length[side["hand_ids"]], float)
@@ -102,13 +102,14 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     tl: SideTimeline = side["timeline"]
     opened = tl.frames[lower_frame + 1]
     opened.hand = np.asarray(release_hand, float)
+    fingers = tuple(item["pinch_fingers"]) if item.get("pinch_fingers") else None     # the pinch's own set
     if item.get("release_pinch_only"):
         # the folded fingers stay as they held: eased to the pre-shape they came down onto a jigsaw piece's edge
         # and lifted it with the hand (green and red pieces within tolerance on 3 -> 9 of 12, stream path)
-        opened.hand = np.where(tip_pinch(side["hand"]).moving, opened.hand, tl.frames[lower_frame].hand)
+        opened.hand = np.where(tip_pinch(side["hand"], fingers).moving, opened.hand, tl.frames[lower_frame].hand)
     # slide the thumb off the object's side before lifting the hand away
     retreat = tl.frames.pop()
-    axis_site = tip_axis(side["hand"], release_hand)        # thumb to fingers, wrist-site frame (right hand) ...
+    axis_site = tip_axis(side["hand"], release_hand, fingers)        # thumb to fingers, wrist-site frame (right hand) ...
     axis_site = mirror_vec(axis_site) if item["hand"] == "left" else axis_site     # ... this hand's
     axis = quat_to_mat(opened.quat) @ axis_site
     away = -np.array([axis[0], axis[1], 0.0]) / np.linalg.norm(axis[:2])
@@ -190,4 +191,4 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     if item.get("release_relax") is not None:     # jigsaw green and red: 10 -> 12 of 12 within 7 mm (stream path)
         folded = tl.frames[lower_frame].hand
         op.on_frame_end(side, lower_frame, relaxed_release(side, slice(lower_frame + 1, end), folded,
-                                                           float(item["release_relax"])))
+                                                           float(item["release_relax"]), fingers))

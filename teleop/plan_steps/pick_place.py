@@ -106,15 +106,16 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     obj = op.scene.task.objects[name]
     body = op.scene.object_body_ids[name]
     lo, hi = op.scene.model.actuator_ctrlrange[side["hand_ids"]].T
-    close = np.clip(tip_pinch(hand).close, lo, hi)
+    fingers = pinch_fingers(item)       # `pinch_fingers`: the pad pinch set the tips come from (default the hand's)
+    close = np.clip(tip_pinch(hand, fingers).close, lo, hi)
     body_rot = data.xmat[body].reshape(3, 3)
     at = body_rot @ grasp_point(item)       # the tips close there: the centre, or a grasp_point (a handle)
     mirror = mirror_vec if left else (lambda v: v)
 
     def turned(q_turn: np.ndarray, q_axis: np.ndarray) -> np.ndarray:
         """Tips at the bottom for shape ``q_turn``; yawed by the tips' axis at ``q_axis``."""
-        R = flat_pinch_rotation(hand, item["hand"], q_turn)
-        closing = R @ mirror(tip_axis(hand, q_axis))
+        R = flat_pinch_rotation(hand, item["hand"], q_turn, fingers)
+        closing = R @ mirror(tip_axis(hand, q_axis, fingers))
         if item.get("grasp_yaw", GRASP_YAW_ACROSS) == GRASP_YAW_ACROSS:
             return yawed(R, across_turn(closing, body_rot, obj.half_extents))
         # degrees: the direction the tips close along (world, from +x; `grasp_yaw_object`: from the object's x axis
@@ -129,18 +130,18 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     touch = side["open"]
     for q_turn in (close, None):
         hand_rot = turned(touch if q_turn is None else q_turn, touch)
-        width = width_along(op.scene.model, data, body, hand_rot @ mirror(tip_axis(hand, touch)),
+        width = width_along(op.scene.model, data, body, hand_rot @ mirror(tip_axis(hand, touch, fingers)),
                             data.xpos[body] + at)
-        touch, centre = tip_preshape(hand, side["open"], close, width)
-    ready, _ = tip_preshape(hand, side["open"], close, width + PINCH_SPREAD_MARGIN_M)
+        touch, centre = tip_preshape(hand, side["open"], close, width, fingers)
+    ready, _ = tip_preshape(hand, side["open"], close, width + PINCH_SPREAD_MARGIN_M, fingers)
     # the last stage presses the tips past each other with grasp_squeeze_m (the wrist as planned for `close`)
-    last = np.clip(squeezed(hand, close, ready, item["grasp_squeeze_m"]), lo, hi) if item.get("grasp_squeeze_m") else close
+    last = np.clip(squeezed(hand, close, ready, item["grasp_squeeze_m"], fingers), lo, hi) if item.get("grasp_squeeze_m") else close
     press = FLAT_PINCH_PRESS_M
     if item.get("grasp_tips_height_m") is not None:
         # the last stage's tips end that high on the part (half a handle's height), never pressed deeper than by
         # default: pressed 8 mm, a linkage finger (one actuator, the tip the lowest point) stuck on the table and
         # did not close; squeezed tips curl 3-5 mm higher than `close`'s
-        press = min(press, tips_over_lowest(hand, item["hand"], last, hand_rot, close) - float(item["grasp_tips_height_m"]))
+        press = min(press, tips_over_lowest(hand, item["hand"], last, hand_rot, close, fingers) - float(item["grasp_tips_height_m"]))
     bottom = float(bounding_box_points(op.scene.model, data, body)[:, 2].min()) - press
     shapes = [ready + k / FLAT_PINCH_STAGES * (close - ready) for k in range(FLAT_PINCH_STAGES + 1)]
     below = [float(-(hand_outline(hand, item["hand"], q) @ hand_rot.T)[:, 2].min()) for q in shapes]
