@@ -544,11 +544,13 @@ class PourStep(PlanStep, GraspFields):
 
 
 class TurnStep(PlanStep):
-    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [palm_look], [speed], [return_home],
+    """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [palm_look], [start_look], [speed], [return_home],
     [approach_over], [withdraw_past_end], [after], [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
     on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
     palm_look: true (with palm_from) re-aims the palm at the link's angle as the fingertips let go of it;
+    start_look: true starts the turn from the link's angle as the hand sets off and as it comes down to it (planned
+    from where earlier steps leave it): its keyframes turn about the hinge to it;
     speed (m/s) is how fast the hand's contact moves along the arc (default 0.09); return_home: false leaves
     the hand risen off the link where it let go, so the next step sets off from there; approach_over: true
     brings the hand to the link from above its top; withdraw_past_end: true takes the hand, once it lets go,
@@ -560,6 +562,9 @@ class TurnStep(PlanStep):
     palm_from: Number = None
     # true: as the palm takes over, the operator looks where the link is (let go, it falls back) and pushes it from there
     palm_look: Bool = False
+    # true: the turn starts from where the link is as the hand sets off for it, not where earlier steps meant to
+    # leave it (a lever that slipped out of the pulling fingers short of its angle, shut again from there)
+    start_look: Bool = False
     speed: Number = Field(None, gt=TURN_SPEED_RANGE_M_S[0], le=TURN_SPEED_RANGE_M_S[1],
                           description=f"m/s of the contact along the arc in ({TURN_SPEED_RANGE_M_S[0]:g}, "
                                       f"{TURN_SPEED_RANGE_M_S[1]:g}]")

@@ -21,6 +21,11 @@ along the hinge all the way and from that angle on the flat palm pushes (teleop/
 A lid let go below vertical at that handoff falls back; with `palm_look` (opt-in) the hand backs well off,
 and the operator looks where the link is as the hand moves in under it, comes up to it and presses, and
 turns the palm's keyframes about the hinge to it (`palm_look`).
+With `start_look` (opt-in) the turn starts from where the link really is: planned from where earlier steps leave
+it, its keyframes turn about the hinge as the hand sets off and again as it comes down to the face: those planned
+short of a link that stopped short come to it and the push goes on from there as planned (a lever that slipped off
+the fingers short of its planned angle is shut from where it stopped, not swept past from where the opening meant
+to leave it); a link beyond the planned start is pushed from there, the push spread over the same steps.
 With `withdraw_past_end` (opt-in) the hand, once it lets go, moves level out along the link past its free end
 and goes on from there, rather than rising over the link (the arm behind it would lie across a tall door's top);
 with home on the link's other side it first turns round that end, past it, until it is wholly on home's side
@@ -147,6 +152,7 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     if palm_from is not None and not pull:      # ... a push along the axis: both, clear of what the link stands on
         back = (back + link.radial(faces[radii[0]])) / np.linalg.norm(back + link.radial(faces[radii[0]]))
     approach = first[0] + APPROACH_HEIGHT_M * back
+    step_first = len(tl.frames)         # this step's first keyframe
     if item.get("approach_over", False):
         # opt-in: first to above the link's top, over whatever is in the way, the link included (a door pulled
         # open past square stands between the hand and its outer side, where its bar is), then down to it
@@ -158,9 +164,12 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         tl.add(DURATIONS["descend"], pos=approach)
     else:
         op.set_off(side, data, item, DURATIONS["approach"], pos=approach, quat=quat(first[1]), hand=side["open"])
+    approached = len(tl.frames) - 1     # the hand off the face, where it comes down from
     tl.add(DURATIONS["descend"], pos=first[0])
     previous, previous_angle, previous_R = (faces[radii[0]], first[0]), start, first[1]
     palm_frames: dict[int, float] = {}      # timeline frame -> the link angle its palm pose was planned for
+    # start_look: every keyframe fixed to the link, from the approach on (timeline frame -> its link angle)
+    link_frames: dict[int, float] = {approached: start, approached + 1: start}
     for angle, radius, tilt in zip(arc, radii, tilts):
         pos, R = pose(angle, radius, tilt)
         face = link.rotated(faces[radius], angle - start)
@@ -175,22 +184,34 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
                 # face there, then comes up to it where the operator sees it (palm_look below)
                 back_off = max(back_off, LOOK_BACK_OFF_M)
                 tl.add(DURATIONS["open"], pos=previous[1] - back_off * previous_R[:, 1])
+                link_frames[len(tl.frames) - 1] = previous_angle
                 tl.add(DURATIONS["open"], pos=pose(angle, radius, tilt, back_off)[0], quat=quat(R))
                 palm_frames[len(tl.frames) - 1] = angle
             else:
                 tl.add(DURATIONS["open"], pos=previous[1] - back_off * previous_R[:, 1])
+                link_frames[len(tl.frames) - 1] = previous_angle
             tl.add(DURATIONS["descend"], pos=pose(angle, radius, tilt, FACE_GAP_M)[0], quat=quat(R))
             palm_frames[len(tl.frames) - 1] = angle
         previous_angle, previous_R = angle, R
         tl.add(steps, pos=pos, quat=quat(R))
         if palm_turns(angle, palm_from, way):
             palm_frames[len(tl.frames) - 1] = angle
+        link_frames[len(tl.frames) - 1] = angle
         previous = (face, pos)
+    looked = palm_frames            # the frames the looks turn about the hinge
+    if item.get("start_look", False):
+        # opt-in: the operator looks where the link is as the hand sets off and as it comes down to the face, and
+        # the turn starts from there (the frames taking the hand over to above the approach move with it)
+        looked = {**link_frames, **palm_frames}
+        follow = [i for i in range(step_first, approached) if np.allclose(tl.frames[i].pos[:2], approach[:2])]
+        op.on_frame_end(side, step_first - 1, start_look(op, side, link, item["turn"], looked, target, approached,
+                                                         follow))
+        op.on_frame_end(side, approached, start_look(op, side, link, item["turn"], looked, target, approached + 1))
     if palm_frames and item.get("palm_look", False):
         # opt-in: as the fingertips back off for the palm, the operator looks where the link is (let go, a lid
         # falls back some way) and the palm comes in at it rather than at the planned angle
         for frame in sorted(palm_frames)[:LOOKS]:
-            op.on_frame_end(side, frame - 1, palm_look(op, side, link, item["turn"], palm_frames, target, frame))
+            op.on_frame_end(side, frame - 1, palm_look(op, side, link, item["turn"], looked, target, frame))
     # draw back off the face the way the fingers came (a palm: straight off it), then rise clear of
     # the link and what it is on
     pos = pos - APPROACH_HEIGHT_M * (R[:, 1] if palm_turns(arc[-1], palm_from, way) else R[:, 2])
@@ -256,18 +277,62 @@ def palm_look(op: PlanningOperator, side: dict, link: "Hinge", joint: str, palm_
     adr = op.scene.model.jnt_qposadr[op.scene.model.joint(joint).id]
 
     def look_at_link(data: mujoco.MjData) -> None:
-        now = float(data.qpos[adr])
-        ref = palm_frames[first]
-        if abs(target - ref) < 1e-9:
-            return
-        frames = side["timeline"].frames
-        for i, planned in [(i, a) for i, a in palm_frames.items() if i >= first]:
-            delta = now + (planned - ref) * (target - now) / (target - ref) - planned
-            turn = axis_rotation(link.axis, delta)
-            frames[i].pos = link.anchor + turn @ (frames[i].pos - link.anchor)
-            frames[i].quat = quat(turn @ quat_to_mat(frames[i].quat))
-            palm_frames[i] = planned + delta
+        _respread(side["timeline"].frames, link, palm_frames, target, first, float(data.qpos[adr]))
     return look_at_link
+
+
+def start_look(op: PlanningOperator, side: dict, link: "Hinge", joint: str, link_frames: dict[int, float],
+               target: float, first: int, follow: list[int] = ()):
+    """The look with `start_look`, at the end of the frame before ``first``: ``link_frames`` (timeline frame ->
+    link angle it was planned for, all fixed to the link) from ``first`` on turn about the hinge. A link short of
+    the angle ``first`` was planned for (between it and ``target``: it slipped back from an opening) is met where
+    it is: the frames planned short of it come to it and the push goes on from there as planned (the poses the
+    plan checked the arm reaches; spreading the whole push over the shorter arc, the fingers lagged the lever 0.1
+    rad and left it open); a link beyond it is pushed from there, the frames spread from it to ``target``. A link
+    already at or past ``target`` is taken as at it (nothing left to push). Frames ``follow`` (the hand's way over
+    to ``first``, above it) move level with ``first``. In the kinematic dry run (teleop/cross_embodiment.py) no
+    look runs: the turn is tracked from where the plan leaves the link."""
+    adr = op.scene.model.jnt_qposadr[op.scene.model.joint(joint).id]
+
+    def look_where_the_link_is(data: mujoco.MjData) -> None:
+        frames = side["timeline"].frames
+        now, ref = float(data.qpos[adr]), link_frames[first]
+        if (target - now) * (target - ref) <= 0.0:
+            now = target
+        before = frames[first].pos.copy()
+        turn = _respread(frames, link, link_frames, target, first, now,
+                         passed_only=(now - target) * (ref - now) >= 0.0)
+        if turn is None:
+            return
+        moved = frames[first].pos - before
+        for i in follow:
+            frames[i].pos = np.array([*(frames[i].pos[:2] + moved[:2]), max(frames[i].pos[2], frames[first].pos[2])])
+            frames[i].quat = quat(turn @ quat_to_mat(frames[i].quat))
+    return look_where_the_link_is
+
+
+def _respread(frames: list, link: "Hinge", angles: dict[int, float], target: float, first: int,
+              now: float, passed_only: bool = False) -> np.ndarray | None:
+    """Turn keyframes ``frames[i]`` for ``angles`` (i -> the link angle each was planned for) from ``first`` on
+    about the hinge: the first to ``now``, the rest spread from there to ``target`` over the same steps, or with
+    ``passed_only`` (``now`` between the first's angle and ``target``) only those planned short of ``now`` come to
+    it and the rest stay as planned; ``angles`` is updated. Returns the first's turn (None when the first was
+    planned at ``target``)."""
+    ref = angles[first]
+    if abs(target - ref) < 1e-9:
+        return None
+    first_turn = None
+    for i, planned in [(i, a) for i, a in angles.items() if i >= first]:
+        if passed_only:
+            delta = now - planned if (planned - now) * (ref - target) > 0.0 else 0.0
+        else:
+            delta = now + (planned - ref) * (target - now) / (target - ref) - planned
+        turn = axis_rotation(link.axis, delta)
+        frames[i].pos = link.anchor + turn @ (frames[i].pos - link.anchor)
+        frames[i].quat = quat(turn @ quat_to_mat(frames[i].quat))
+        angles[i] = planned + delta
+        first_turn = turn if i == first else first_turn
+    return first_turn
 
 
 def _solve(kin, pos: np.ndarray, R: np.ndarray, q: np.ndarray) -> np.ndarray:
