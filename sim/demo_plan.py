@@ -5,7 +5,7 @@ target), `drag` (pull a container into a zone), `pour` (tip a bottle's mouth ove
 (press keys or buttons in order), `turn` (swing a lid or a door to a joint angle), `carry` (both hands
 carry an object between their palms), `strike` (hit a target once with a tool, then put the tool away),
 `handover` (one hand gives an object to the other in the air).
-Every field is checked when the task loads by the step kind's schema (sim/schema/demo_plan.py), so a
+Every field is checked when the task loads by the step kind's schema (sim/schema/demo_plan/), so a
 bad plan fails then, naming the step and the field. A new kind is a new model there and a planner in
 teleop/plan_steps/.
 """
@@ -41,7 +41,7 @@ def step_kind(step: dict) -> str:
 
 def parse_plan(path, raw: dict, scope: PlanScope) -> list[dict]:
     """The task's `demo_plan`, every step checked; the steps are returned as written (the planners read
-    their fields with the defaults in sim/schema/demo_plan.py)."""
+    their fields with the defaults in sim/schema/demo_plan/)."""
     plan = raw.get("demo_plan") or []
     if not isinstance(plan, list):
         raise SpecError(path, "demo_plan", f"a list of steps {PLAN_STEP}", plan)

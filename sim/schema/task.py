@@ -4,7 +4,7 @@ An object's geometry and joints (`shape` + `size`, `parts`, `links`, `key_rows`)
 in sim/schema/object_parts.py; a mesh's file where it is read (sim/scene/mesh_files.py). Blocks with their
 own compilers stay mappings or lists here and are checked by them, with the same file-and-field errors:
 `demo_plan` (sim/demo_plan.py, which validates each step against its kind's schema in
-sim/schema/demo_plan.py, with the task's objects as context) and `metrics` (the shared evaluator). What
+sim/schema/demo_plan/, with the task's objects as context) and `metrics` (the shared evaluator). What
 refers across objects (a zone, a support object, the paper embodiment) is checked by the loader."""
 
 from __future__ import annotations
