@@ -75,7 +75,7 @@ def tip_pinch(hand_name: str, fingers: tuple[str, ...] | None = None) -> TipPinc
     (the nearest natural start), the other fingers folded away as there. ``fingers`` (a plan step's
     `pinch_fingers`): the pad pinch with that set (default the hand's own, teleop/pinch_grasp.py)."""
     kin = hand_kinematics(hand_name)
-    pads = pinch_grasp(hand_name, fingers) if fingers else pinch_grasp(hand_name)
+    pads = pinch_grasp(hand_name, fingers)
     fingers = pads.fingers
     thumb, tips = pinch_rows(hand_name, fingers)
     moving, folded = moving_and_folded(kin, [thumb, *tips])

@@ -54,6 +54,11 @@ def pinch_rows(hand_name: str, fingers: tuple[str, ...]) -> tuple[int, list[int]
     return thumb, tips
 
 
+def pinch_fingers(item: dict) -> tuple[str, ...] | None:
+    """A plan step's `pinch_fingers`, for a pad or a flat pinch (None: the hand's own set, `pinch_grasp`)."""
+    return tuple(item["pinch_fingers"]) if item.get("pinch_fingers") else None
+
+
 @functools.lru_cache(maxsize=None)
 def pinch_grasp(hand_name: str, fingers: tuple[str, ...] | None = None) -> PinchGrasp:
     """The first finger set whose pads meet the thumb's, else the set that comes closest. ``fingers`` (a

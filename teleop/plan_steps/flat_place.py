@@ -43,6 +43,7 @@ from sim.embodiment.frames import quat_to_mat
 from sim.embodiment.mirror import mirror_vec
 from teleop.flat_pinch import tip_axis, tip_pinch
 from teleop.operator_motion import UP, SideTimeline, quat, yaw_of, yawed
+from teleop.pinch_grasp import pinch_fingers
 from teleop.plan_steps.operator import PlanningOperator
 
 LIFTED_M = 0.02         # an object this far above where it lay has been picked up
@@ -102,7 +103,7 @@ def flat_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str,
     tl: SideTimeline = side["timeline"]
     opened = tl.frames[lower_frame + 1]
     opened.hand = np.asarray(release_hand, float)
-    fingers = tuple(item["pinch_fingers"]) if item.get("pinch_fingers") else None     # the pinch's own set
+    fingers = pinch_fingers(item)
     if item.get("release_pinch_only"):
         # the folded fingers stay as they held: eased to the pre-shape they came down onto a jigsaw piece's edge
         # and lifted it with the hand (green and red pieces within tolerance on 3 -> 9 of 12, stream path)

@@ -24,7 +24,7 @@ from sim.scene.reach import PALM_DOWN
 from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, tips_over_lowest, width_along
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yaw_of, yawed)
-from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_grasp, pinch_preshape, thumb_actuators
+from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_fingers, pinch_grasp, pinch_preshape, thumb_actuators
 from teleop.pinch_squeeze import squeezed
 from teleop.pinch_tips import tips_clear_preshape
 from teleop.plan_steps.flat_place import flat_place
@@ -70,11 +70,6 @@ def level_pinch_pitch(hand_name: str, fingers: tuple[str, ...] | None = None) ->
     pitches = np.arange(0.0, 61.0)
     elevation = np.array([(pitched_palm_down(p) @ axis)[2] for p in pitches])
     return float(pitches[np.argmin(np.abs(elevation))]) if elevation[0] > 0 else 0.0
-
-
-def pinch_fingers(item: dict) -> tuple[str, ...] | None:
-    """A pad pinch's `pinch_fingers` (None: the hand's own pinch, teleop/pinch_grasp.py)."""
-    return tuple(item["pinch_fingers"]) if item.get("pinch_fingers") else None
 
 
 def grasp_kind(item: dict) -> str:

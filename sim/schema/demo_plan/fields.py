@@ -74,12 +74,14 @@ ObjectAxis = vector_of((3,), "[x, y, z], a direction in the object's frame")
 AirPoint = vector_of((3,), "[x, y, z] of the table top in metres, z above it")
 
 
-def only_with_grasp(grasp: str, what: str):
-    """A `before` check of a field that means something with one grasp only (``what`` it is): refused with
-    any other grasp (the step's `grasp` is validated before it)."""
+def only_with_grasp(grasp: str | tuple[str, ...], what: str):
+    """A `before` check of a field that means something with one grasp (or one of several) only (``what`` it
+    is): refused with any other grasp (the step's `grasp` is validated before it)."""
+    grasps = (grasp,) if isinstance(grasp, str) else grasp
+
     def check(value, info: ValidationInfo):
-        if info.data.get("grasp") != grasp:
-            raise ValueError(f"no {info.field_name} without grasp: {grasp} ({what})")
+        if info.data.get("grasp") not in grasps:
+            raise ValueError(f"no {info.field_name} without grasp: {' or '.join(grasps)} ({what})")
         return value
     return check
 

@@ -119,12 +119,8 @@ class GraspFields(CatalogModel):
             raise ValueError(words)
         return yaw
 
-    @field_validator("pinch_fingers", mode="before")
-    @classmethod
-    def _a_pinch_only(cls, fingers, info: ValidationInfo):
-        if info.data.get("grasp") not in ("pinch", "flat_pinch"):
-            raise ValueError("no pinch_fingers without grasp: pinch or flat_pinch (the fingers the thumb closes against)")
-        return fingers
+    _a_pinch_only = field_validator("pinch_fingers", mode="before")(
+        only_with_grasp(("pinch", "flat_pinch"), "the fingers the thumb closes against"))
     _flat_pinch_only = field_validator("grasp_squeeze_m", mode="before")(
         only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
     _flat_pinch_tips_height = field_validator("grasp_tips_height_m", mode="before")(
