@@ -141,7 +141,8 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
         close_shared_helpers()
         t0, cpu0, child0 = time.perf_counter(), time.process_time(), children_cpu()
         if way == "whole_recordings":
-            done = list(replay_recordings(raws, profile, out, workers=workers))
+            done = list(replay_recordings(raws, profile, out, workers=workers, shared=shared))
+            helped.append(shared["frames_helped"])
         else:   # each recording in turn: alone, or (the way before) its render shared with helpers
             n = 1 if way == "one_worker" else workers
             done = [result for raw in raws for result in replay_recordings([raw], profile, out, workers=n)]
@@ -152,6 +153,8 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
             raise RuntimeError(f"batch replay ({way}) failed: {failed}")
         return wall, cpu, [file_sha256(e) for _, e in done]
 
+    shared: dict = {}
+    helped: list[int] = []      # per run: frames this process rendered for the spawned ones' recordings
     ways = ["one_worker", "render_shared", "whole_recordings"]
     walls: dict[str, list[float]] = {w: [] for w in ways}
     cpus: dict[str, list[float]] = {w: [] for w in ways}
@@ -167,10 +170,12 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
         "wall_s_median": wall, "wall_s": walls, "cpu_s": cpus,
         "speedup_vs_one_worker": {w: round(wall["one_worker"] / wall[w], 3) for w in ways[1:]},
         "whole_recordings_vs_render_shared": round(wall["render_shared"] / wall["whole_recordings"], 3),
+        "whole_recordings_frames_helped": helped,
         "episodes_identical": len({tuple(h) for h in hashes.values()}) == 1,
         "note": ("replay + render + assemble of every recording, from no helper or worker process up; "
                  "render_shared: the recordings in turn, each render shared with helper processes (the only "
-                 "way before stop 35); whole_recordings: each of `workers` processes replays whole recordings; "
+                 "way before stop 35); whole_recordings: each of `workers` processes replays whole recordings, and once this one has "
+                 "none left it helps render the others' (frames_helped: how many frames it rendered for them); "
                  "wall clock, so other processes' load counts; cpu_s includes the processes' start-up"),
     }
 

@@ -42,12 +42,15 @@ log = logging.getLogger(__name__)
 MAX_AHEAD = 8        # frames a renderer may start beyond the last one written (bounds the frames held in memory)
 WAIT_S = 0.002       # a helper held back by MAX_AHEAD looks again after this
 POLL_S = 1.0         # the writer checks that its helpers still live at this interval while it waits
-JOB, NEXT, TOTAL, WRITTEN = range(4)     # the shared counters
+JOB, NEXT, TOTAL, WRITTEN, JOINED = range(5)     # the shared counters (JOINED: a bit per helper)
+STATE_SLOTS = 5
 
 
-def _take(lock, state, job: int, max_ahead: int) -> int | None:
+def _take(lock, state, job: int, max_ahead: int, helper: int | None = None) -> int | None:
     """The next frame index of `job` for the calling renderer, or None when it has none left (or the
-    job ended); -1 when every index left is more than `max_ahead` beyond the last frame written."""
+    job ended); -1 when every index left is more than `max_ahead` beyond the last frame written.
+    A helper (`helper`: its index) joins the job with the first frame it takes: the writer waits at
+    the end for the helpers that joined, and only for them."""
     with lock:
         if state[JOB] != job or state[NEXT] >= state[TOTAL]:
             return None
@@ -55,6 +58,8 @@ def _take(lock, state, job: int, max_ahead: int) -> int | None:
         if i >= state[WRITTEN] + max_ahead:
             return -1
         state[NEXT] = i + 1
+        if helper is not None:
+            state[JOINED] |= 1 << helper
         return i
 
 
@@ -64,42 +69,54 @@ def _take(lock, state, job: int, max_ahead: int) -> int | None:
 def _helper_main(index: int, tasks, conn, lock, state, parent_pid: int, max_ahead: int) -> None:
     die_with_parent(parent_pid)
     one_core()      # one helper is meant for one core
-    from episodes.replay_frames import ReplayFrames
-
     out = _Sender(conn)
     _warm_gl()
     # this process's CPU seconds so far: interpreter, the imports spawn repeats (the parent's main
     # module's too), GL start-up
     out.send("ready", index, 0, None, time.process_time())
     while (task := tasks.get()) is not None:
-        job, replay_path, profile, steps = task
-        cpu = time.process_time()
-        if state[JOB] != job:         # the writer finished without us: no scene to build
-            out.send("done", index, job, None, {"frames": 0, "seconds": {}, "frame_windows": [],
-                                                "setup_cpu_s": 0.0, "cpu_s": 0.0})
-            continue
-        try:
-            frames = ReplayFrames(Path(replay_path), profile, steps)
-        except BaseException as exc:     # reported to the writer, which renders this helper's share itself
-            out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
-            continue
-        setup_cpu, first, count = time.process_time() - cpu, time.time(), 0
-        try:
-            while (i := _take(lock, state, job, max_ahead)) is not None:
-                if i < 0:
-                    time.sleep(WAIT_S)
-                    continue
-                out.send("frame", index, job, i, frames.capture(i))
-                count += 1
-        except BaseException as exc:
-            out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
-            continue
-        finally:
-            frames.close()
+        help_render(task, index, out, lock, state, max_ahead)
+    out.close()
+
+
+def help_render(task: tuple, index: int, out: "_Sender", lock, state, max_ahead: int,
+                still_wanted=lambda: True) -> int:
+    """Render frames of the job `task` (job id, replay path, profile, steps) as helper `index`, taking
+    them from the shared counter and sending them through `out`, until none is left; then its timings.
+    A job that ended before its scene was built is skipped without a word (the writer waits only for
+    helpers that took a frame). `still_wanted()` is asked while the writer holds this helper back: False
+    gives up (the writer's process is gone). Returns the number of frames rendered."""
+    from episodes.replay_frames import ReplayFrames
+
+    job, replay_path, profile, steps = task
+    cpu = time.process_time()
+    if state[JOB] != job:         # the writer finished without us: no scene to build
+        return 0
+    try:
+        frames = ReplayFrames(Path(replay_path), profile, steps)
+    except BaseException as exc:     # reported to the writer, which renders this helper's share itself
+        out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
+        return 0
+    setup_cpu, first, count = time.process_time() - cpu, time.time(), 0
+    try:
+        while (i := _take(lock, state, job, max_ahead, index)) is not None:
+            if i < 0:
+                if not still_wanted():
+                    break
+                time.sleep(WAIT_S)
+                continue
+            out.send("frame", index, job, i, frames.capture(i))
+            count += 1
+    except BaseException as exc:
+        out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
+        return count
+    finally:
+        frames.close()
+    if count:
         out.send("done", index, job, None, {
             "frames": count, "seconds": frames.seconds(), "frame_windows": [(first, time.time())],
             "setup_cpu_s": setup_cpu, "cpu_s": time.process_time() - cpu})
-    out.close()
+    return count
 
 
 class _Sender:
@@ -109,28 +126,59 @@ class _Sender:
 
     Arrays travel beside the pickle (protocol 5 out-of-band buffers): a paper frame is ~24 MB, and
     pickling it whole cost ~17 ms each side where a copy costs ~3. They are copied here, at once,
-    as the next capture may reuse its buffers."""
+    as the next capture may reuse its buffers, into one block with the pickle: a preview frame has
+    ~95 arrays, and a pipe message each cost the two processes ~0.9 ms a frame together."""
 
     def __init__(self, conn):
         self._conn, self._queue = conn, queue.SimpleQueue()
+        self.broken = False         # the writer's end closed: nothing sent from here on arrives
         self._thread = threading.Thread(target=self._run, name="render-helper-sender", daemon=True)
         self._thread.start()
 
     def send(self, *message) -> None:
         buffers: list[pickle.PickleBuffer] = []
         head = pickle.dumps(message, 5, buffer_callback=buffers.append)
-        self._queue.put([head, *(bytes(b.raw()) for b in buffers)])
+        self._queue.put(_pack(head, [b.raw() for b in buffers]))
 
     def _run(self) -> None:
         while (parts := self._queue.get()) is not None:
-            self._conn.send_bytes(np.array([len(p) for p in parts], np.int64).tobytes())
-            for part in parts:
-                self._conn.send_bytes(part)
+            sizes, block = parts
+            try:
+                self._conn.send_bytes(sizes)
+                self._conn.send_bytes(block)
+            except OSError:         # the writer's process is gone
+                self.broken = True
+                return
+
+    def finish(self, wait: bool = True) -> None:
+        """Stop the sending thread once what is queued is sent (`wait`), or leave it (it is a daemon):
+        a thread blocked on a pipe whose reader is gone never returns."""
+        self._queue.put(None)
+        if wait:
+            self._thread.join()
 
     def close(self) -> None:
-        self._queue.put(None)
-        self._thread.join()
+        self.finish()
         self._conn.close()
+
+
+ALIGN = 64      # each array's bytes start at a multiple of this in a message's block (as numpy allocates)
+
+
+def _offsets(sizes: np.ndarray) -> np.ndarray:
+    """Where each part starts in a block holding them in order, every part aligned to ALIGN."""
+    padded = -(-sizes // ALIGN) * ALIGN
+    return np.concatenate([[0], np.cumsum(padded)[:-1]]).astype(np.int64)
+
+
+def _pack(head: bytes, arrays: list[memoryview]) -> tuple[bytes, bytearray]:
+    """A message as (its parts' sizes, one block of the pickle and the arrays' bytes, each aligned)."""
+    sizes = np.array([len(head), *(a.nbytes for a in arrays)], np.int64)
+    offsets = _offsets(sizes)
+    block = bytearray(int(offsets[-1] + sizes[-1]))
+    for part, start, size in zip([head, *arrays], offsets, sizes):
+        block[start:start + size] = part
+    return sizes.tobytes(), block
 
 
 def _warm_gl() -> None:
@@ -159,46 +207,20 @@ def _warm_gl() -> None:
 # ---------------------------------------------------------------- writer side
 
 
-class RenderHelpers:
-    """`count` helper processes, started now and kept until `close()`."""
+class HelperChannels:
+    """The writer's side of `count` helpers: the shared counters, a task queue and a frame pipe per
+    helper, and the jobs handed to them. Who the helpers are is the subclass's: processes this one
+    spawned (RenderHelpers), or a batch's process with nothing left to do (episodes/render_desk.py)."""
 
-    def __init__(self, count: int, max_ahead: int = MAX_AHEAD):
-        if count < 1:
-            raise ValueError(f"render helpers: expected at least 1, got {count}")
-        ctx = multiprocessing.get_context("spawn")   # a forked child would inherit GL and h5py state
-        self.owner = os.getpid()
+    def __init__(self, count: int, max_ahead: int, lock, state, tasks: list, readers: list):
         self.count, self.max_ahead = count, max_ahead
-        self._lock, self._state = ctx.Lock(), ctx.RawArray("q", 4)
-        self._tasks = [ctx.SimpleQueue() for _ in range(count)]
-        self._readers, self._procs = [], []
-        for k in range(count):
-            reader, writer = ctx.Pipe(duplex=False)
-            self._procs.append(ctx.Process(target=_helper_main, name=f"b2d-render-helper-{k}", daemon=True,
-                                           args=(k, self._tasks[k], writer, self._lock, self._state, os.getpid(),
-                                                 max_ahead)))
-            self._procs[-1].start()
-            writer.close()      # the helper's end only: its death is then end-of-file here
-            self._readers.append(reader)
+        self._lock, self._state, self._tasks, self._readers = lock, state, tasks, readers
         self._lost: set[int] = set()     # helpers whose pipe ended or broke
         self._jobs = 0
         self._busy = threading.Lock()
-        self.startup_cpu_s: dict[int, float] = {}     # per helper: CPU seconds of its start (imports, GL)
 
-    def alive(self) -> bool:
-        return not self._lost and all(p.is_alive() for p in self._procs)
-
-    def ready(self, k: int) -> bool:
-        """Whether helper `k` has said it started (imports, GL): one still starting takes no frames yet."""
-        return k in self.startup_cpu_s
-
-    def wait_ready(self, timeout: float = 120.0) -> dict[int, float]:
-        """Block until every helper has started (imports, GL); their start-up CPU seconds."""
-        deadline = time.monotonic() + timeout
-        while len(self.startup_cpu_s) < self.count:
-            if time.monotonic() > deadline or not self._receive(set(range(self.count)), 0, {}, [], POLL_S):
-                raise RuntimeError(f"render helpers: {self.count - len(self.startup_cpu_s)} of {self.count} "
-                                   f"did not start within {timeout:.0f} s")
-        return dict(self.startup_cpu_s)
+    def _helper_alive(self, k: int) -> bool:
+        raise NotImplementedError
 
     @contextmanager
     def job(self, replay_path: Path, profile, steps: np.ndarray, helpers: int):
@@ -212,9 +234,9 @@ class RenderHelpers:
             self._jobs += 1
             job = _Job(self, self._jobs, len(steps))
             with self._lock:
-                self._state[:] = [job.id, 0, len(steps), 0]
+                self._state[:] = [job.id, 0, len(steps), 0, 0]
             for k in range(min(helpers, self.count)):
-                if k not in self._lost and self._procs[k].is_alive():
+                if k not in self._lost and self._helper_alive(k):
                     self._tasks[k].put((job.id, str(replay_path), profile, np.asarray(steps)))
                     job.open.add(k)
             try:
@@ -234,7 +256,7 @@ class RenderHelpers:
             return False
         ready = multiprocessing.connection.wait(list(readers), timeout)
         if not ready:
-            return all(self._procs[k].is_alive() for k in helpers)
+            return all(self._helper_alive(k) for k in helpers)
         ok = True
         for reader in ready:
             k = readers[reader]
@@ -250,7 +272,7 @@ class RenderHelpers:
     def _handle(self, message, job: int, pending: dict, helpers: set, stats: list) -> bool:
         kind, helper, of_job, i, payload = message
         if kind == "ready":
-            self.startup_cpu_s[helper] = payload
+            self._ready(helper, payload)
         elif of_job != job:
             pass                              # left over from an earlier job
         elif kind == "frame":
@@ -263,6 +285,53 @@ class RenderHelpers:
             log.warning("render helper %d failed; the writing process renders its frames: %s", helper, payload)
             return False
         return True
+
+    def _ready(self, helper: int, startup_cpu_s: float) -> None:
+        pass
+
+
+class RenderHelpers(HelperChannels):
+    """`count` helper processes, started now and kept until `close()`."""
+
+    def __init__(self, count: int, max_ahead: int = MAX_AHEAD):
+        if count < 1:
+            raise ValueError(f"render helpers: expected at least 1, got {count}")
+        ctx = multiprocessing.get_context("spawn")   # a forked child would inherit GL and h5py state
+        self.owner = os.getpid()
+        super().__init__(count, max_ahead, ctx.Lock(), ctx.RawArray("q", STATE_SLOTS),
+                         [ctx.SimpleQueue() for _ in range(count)], [])
+        self._procs = []
+        for k in range(count):
+            reader, writer = ctx.Pipe(duplex=False)
+            self._procs.append(ctx.Process(target=_helper_main, name=f"b2d-render-helper-{k}", daemon=True,
+                                           args=(k, self._tasks[k], writer, self._lock, self._state, os.getpid(),
+                                                 max_ahead)))
+            self._procs[-1].start()
+            writer.close()      # the helper's end only: its death is then end-of-file here
+            self._readers.append(reader)
+        self.startup_cpu_s: dict[int, float] = {}     # per helper: CPU seconds of its start (imports, GL)
+
+    def _helper_alive(self, k: int) -> bool:
+        return self._procs[k].is_alive()
+
+    def alive(self) -> bool:
+        return not self._lost and all(p.is_alive() for p in self._procs)
+
+    def ready(self, k: int) -> bool:
+        """Whether helper `k` has said it started (imports, GL): one still starting takes no frames yet."""
+        return k in self.startup_cpu_s
+
+    def _ready(self, helper: int, startup_cpu_s: float) -> None:
+        self.startup_cpu_s[helper] = startup_cpu_s
+
+    def wait_ready(self, timeout: float = 120.0) -> dict[int, float]:
+        """Block until every helper has started (imports, GL); their start-up CPU seconds."""
+        deadline = time.monotonic() + timeout
+        while len(self.startup_cpu_s) < self.count:
+            if time.monotonic() > deadline or not self._receive(set(range(self.count)), 0, {}, [], POLL_S):
+                raise RuntimeError(f"render helpers: {self.count - len(self.startup_cpu_s)} of {self.count} "
+                                   f"did not start within {timeout:.0f} s")
+        return dict(self.startup_cpu_s)
 
     def close(self) -> None:
         for p, tasks in zip(self._procs, self._tasks):
@@ -281,18 +350,19 @@ class RenderHelpers:
 
 
 def _receive_message(reader):
-    """One message of a `_Sender`: the sizes of its parts, its pickle, then its arrays' bytes, each read
-    into a buffer of its own (aligned and writable, as the arrays it becomes)."""
+    """One message of a `_Sender`: its parts' sizes, then one block of its pickle and its arrays' bytes,
+    read into one buffer (writable; each array aligned within it, as the arrays it becomes)."""
     sizes = np.frombuffer(reader.recv_bytes(), np.int64)
-    head, buffers = reader.recv_bytes(), []
-    for size in sizes[1:]:
-        buffers.append(bytearray(int(size)))
-        reader.recv_bytes_into(buffers[-1])
+    offsets = _offsets(sizes)
+    block = bytearray(int(offsets[-1] + sizes[-1]))
+    reader.recv_bytes_into(block)
+    view = memoryview(block)
+    head, *buffers = (view[start:start + size] for start, size in zip(offsets, sizes))
     return pickle.loads(head, buffers=buffers)
 
 
 class _Job:
-    def __init__(self, helpers: RenderHelpers, job_id: int, total: int):
+    def __init__(self, helpers: HelperChannels, job_id: int, total: int):
         self.helpers, self.id, self.total = helpers, job_id, total
         self.open: set[int] = set()       # helpers handed the job that have not reported its end
         self.stats: list[dict] = []
@@ -326,12 +396,12 @@ class _Job:
                     h._state[JOB] = 0       # the others stop too; what is missing is rendered here
         with h._lock:
             h._state[JOB] = 0       # a helper still building its scene skips the job
-        # their timings, for benchmarks (they end within a frame); one still starting took no frame and is
-        # not waited for: its late reply to this job is dropped as left over
-        self.open = {k for k in self.open if h.ready(k)}
+            joined = h._state[JOINED]
+        # the timings of the helpers that took part, for benchmarks (they end within a frame); one that
+        # took no frame (still starting, or busy elsewhere) is not waited for
+        self.open = {k for k in self.open if joined >> k & 1}
         while self.open and not alone:
             alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
-            self.open = {k for k in self.open if h.ready(k)}
 
 
 # ---------------------------------------------------------------- one set per process

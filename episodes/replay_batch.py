@@ -4,7 +4,9 @@ One recording on N workers shares its frames' render between processes (episodes
 physics replay and the episode's assembly stay in one process, and sharing a frame costs a pipe copy.
 Several recordings on N workers go faster whole: this process and N-1 spawned ones each take the next
 recording and replay, render and assemble it, so every stage runs on every core and nothing passes
-between them. Either way each episode is byte-identical to a one-worker replay of it.
+between them until the end: once this process has none left to take, it helps render the spawned ones'
+last recordings (episodes/render_desk.py). Either way each episode is byte-identical to a one-worker
+replay of it.
 """
 
 from __future__ import annotations
@@ -20,20 +22,24 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Iterator
 
+from episodes.render_desk import Desks, take_desk
 from episodes.stages import raw_to_episode
 from episodes.workers import one_core, start_worker
 from sim.registry import SensorProfile
 from sim.replay import DEFAULT_DRIFT_BOUND_M
 
 Outcome = Path | Exception      # an episode written, or the error its recording met
+HELP_POLL_S = 0.02      # with nothing left to take, how often this process looks for a render to help
 
 
 def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Path, workers: int = 1,
-                      max_frames: int | None = None,
-                      drift_bound_m: float = DEFAULT_DRIFT_BOUND_M) -> Iterator[tuple[Path, Outcome]]:
+                      max_frames: int | None = None, drift_bound_m: float = DEFAULT_DRIFT_BOUND_M,
+                      shared: dict | None = None) -> Iterator[tuple[Path, Outcome]]:
     """``(raw path, episode path or the error it met)`` for each recording, in the order given; one that
     fails never stops the others. With ``workers`` > 1 and more than one recording, whole recordings
-    run on that many processes (this one included); one recording shares its render between them."""
+    run on that many processes (this one included); one recording shares its render between them.
+    ``shared`` (benchmarks) gets ``frames_helped``: the frames this process rendered for the others'
+    recordings once it had none left to take."""
     paths, out_dir = [Path(p) for p in raw_paths], Path(out_dir)
     options = {"max_frames": max_frames, "drift_bound_m": drift_bound_m}
     if workers <= 1 or len(paths) < 2:
@@ -50,7 +56,7 @@ def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Pa
         seen.add(path.name)
     done: dict[int, Outcome] = {}
     given = 0
-    for i, outcome in _whole_recordings(first, profile, out_dir, options, min(workers, len(first))):
+    for i, outcome in _whole_recordings(first, profile, out_dir, options, min(workers, len(first)), shared):
         done[i] = outcome
         while given in done:            # in the order given, as soon as each is ready
             yield paths[given], done.pop(given)
@@ -60,10 +66,11 @@ def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Pa
 
 
 def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out_dir: Path, options: dict,
-                      processes: int) -> Iterator[tuple[int, Outcome]]:
+                      processes: int, shared: dict | None = None) -> Iterator[tuple[int, Outcome]]:
     """``(index, outcome)`` of each item as it finishes: this process and ``processes`` - 1 spawned ones
-    take the next recording from one queue. A spawned process that dies (out of memory, a crash in a
-    native library) fails the recordings it was given; this one takes the rest."""
+    take the next recording from one queue; once none is left, this one helps render theirs
+    (episodes/render_desk.py). A spawned process that dies (out of memory, a crash in a native library)
+    fails the recordings it was given; this one takes the rest."""
     waiting, lock, finished = deque(items), threading.Lock(), queue.SimpleQueue()
 
     def take() -> tuple[int, Path] | None:
@@ -88,8 +95,10 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
             except Exception as exc:     # e.g. a result that could not be passed back
                 finished.put((item[0], exc))
 
-    pool = ProcessPoolExecutor(processes - 1, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=start_worker, initargs=(os.getpid(), one_core))
+    ctx = multiprocessing.get_context("spawn")
+    desks = Desks(ctx, processes - 1)      # where this process, once it has nothing left, helps their renders
+    pool = ProcessPoolExecutor(processes - 1, mp_context=ctx, initializer=_start_replay_worker,
+                               initargs=(os.getpid(), desks.for_workers()))
     feeders = [threading.Thread(target=feed, args=(pool,), name=f"replay-feeder-{k}", daemon=True)
                for k in range(processes - 1)]
     one_core()       # this process is one of the workers too (its rendering stays on one core from here on)
@@ -101,9 +110,15 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
             item = take()
             if item is not None:
                 finished.put((item[0], _replay_one(item[1], profile, out_dir, options, 1)))
-            # what is done so far; with nothing left to take, wait for what the spawned processes have in hand
+            # what is done so far; with nothing left to take, help the spawned processes' renders while
+            # waiting for what they have in hand
             while given < len(items) and (item is None or not finished.empty()):
-                result = finished.get()
+                if item is None and finished.empty() and desks.help_one():
+                    continue
+                try:
+                    result = finished.get(timeout=HELP_POLL_S if item is None else None)
+                except queue.Empty:
+                    continue
                 if result is None:       # a recording handed back: take it
                     break
                 given += 1
@@ -112,6 +127,15 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
         with lock:                       # abandoned early: nothing more is started
             waiting.clear()
         pool.shutdown(wait=given == len(items), cancel_futures=True)
+        if shared is not None:
+            shared["frames_helped"] = desks.frames_helped
+
+
+def _start_replay_worker(parent_pid: int, desk_args: tuple) -> None:
+    """A spawned process's start: it dies with this one, renders on one core and posts its renders at
+    its desk."""
+    start_worker(parent_pid, one_core)
+    take_desk(*desk_args)
 
 
 def _replay_one(path: Path, profile: SensorProfile, out_dir: Path, options: dict, workers: int) -> Outcome:

@@ -92,6 +92,11 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
         raise ValueError(f"{replay_path}: no frames to render (max_frames={max_frames})")
     helpers = max(0, min(workers, len(steps) // MIN_FRAMES_PER_WORKER) - 1)
     pool = start_render_helpers(helpers, replay_path) if helpers else None
+    if pool is None and len(steps) >= 2 * MIN_FRAMES_PER_WORKER:
+        from episodes.render_desk import standby_helper
+
+        pool = standby_helper()     # in a batch's spawned process: the batch's own, once it has nothing left
+        helpers = 1 if pool is not None else 0
     if pool is not None:
         with pool.job(replay_path, profile, steps, helpers) as job:
             stats = _render_steps(replay_path, profile, steps, out_path, job)
