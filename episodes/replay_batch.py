@@ -11,6 +11,7 @@ replay of it.
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
 import queue
@@ -22,14 +23,14 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Iterator
 
-from episodes.render_desk import Desks, take_desk
+from episodes.render_desk import HELP_POLL_S, Desks, help_until_finished, leave_desk, take_desk
 from episodes.stages import raw_to_episode
 from episodes.workers import one_core, start_worker
 from sim.registry import SensorProfile
 from sim.replay import DEFAULT_DRIFT_BOUND_M
 
 Outcome = Path | Exception      # an episode written, or the error its recording met
-HELP_POLL_S = 0.02      # with nothing left to take, how often this process looks for a render to help
+log = logging.getLogger(__name__)
 
 
 def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Path, workers: int = 1,
@@ -68,10 +69,11 @@ def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Pa
 def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out_dir: Path, options: dict,
                       processes: int, shared: dict | None = None) -> Iterator[tuple[int, Outcome]]:
     """``(index, outcome)`` of each item as it finishes: this process and ``processes`` - 1 spawned ones
-    take the next recording from one queue; once none is left, this one helps render theirs
+    take the next recording from one queue; a process with none left to take helps render the others'
     (episodes/render_desk.py). A spawned process that dies (out of memory, a crash in a native library)
     fails the recordings it was given; this one takes the rest."""
     waiting, lock, finished = deque(items), threading.Lock(), queue.SimpleQueue()
+    helped: list[int] = []       # frames each spawned process rendered for the others
 
     def take() -> tuple[int, Path] | None:
         with lock:
@@ -94,11 +96,16 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
                     "replay it again, with --workers 1 to find the recording at fault")))
             except Exception as exc:     # e.g. a result that could not be passed back
                 finished.put((item[0], exc))
+        try:      # nothing left to take: the process this feeder fed helps the others' renders
+            helped.append(pool.submit(help_until_finished).result())
+        except Exception:            # a broken pool: the recordings it had report it; helping costs only time
+            log.debug("a spawned process stopped helping", exc_info=True)
 
     ctx = multiprocessing.get_context("spawn")
-    desks = Desks(ctx, processes - 1)      # where this process, once it has nothing left, helps their renders
+    desks = Desks(ctx, processes)
+    take_desk(desks, 0)              # this process's renders are open to help too
     pool = ProcessPoolExecutor(processes - 1, mp_context=ctx, initializer=_start_replay_worker,
-                               initargs=(os.getpid(), desks.for_workers()))
+                               initargs=(os.getpid(), desks))
     feeders = [threading.Thread(target=feed, args=(pool,), name=f"replay-feeder-{k}", daemon=True)
                for k in range(processes - 1)]
     one_core()       # this process is one of the workers too (its rendering stays on one core from here on)
@@ -113,7 +120,7 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
             # what is done so far; with nothing left to take, help the spawned processes' renders while
             # waiting for what they have in hand
             while given < len(items) and (item is None or not finished.empty()):
-                if item is None and finished.empty() and desks.help_one():
+                if item is None and finished.empty() and desks.help_one(0):
                     continue
                 try:
                     result = finished.get(timeout=HELP_POLL_S if item is None else None)
@@ -126,16 +133,18 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
     finally:
         with lock:                       # abandoned early: nothing more is started
             waiting.clear()
+        desks.finished.value = 1         # helping processes stop
         pool.shutdown(wait=given == len(items), cancel_futures=True)
+        leave_desk()
         if shared is not None:
-            shared["frames_helped"] = desks.frames_helped
+            shared["frames_helped"] = desks.frames_helped + sum(helped)
 
 
-def _start_replay_worker(parent_pid: int, desk_args: tuple) -> None:
+def _start_replay_worker(parent_pid: int, desks: Desks) -> None:
     """A spawned process's start: it dies with this one, renders on one core and posts its renders at
     its desk."""
     start_worker(parent_pid, one_core)
-    take_desk(*desk_args)
+    take_desk(desks)
 
 
 def _replay_one(path: Path, profile: SensorProfile, out_dir: Path, options: dict, workers: int) -> Outcome:

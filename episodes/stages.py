@@ -93,10 +93,10 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
     helpers = max(0, min(workers, len(steps) // MIN_FRAMES_PER_WORKER) - 1)
     pool = start_render_helpers(helpers, replay_path) if helpers else None
     if pool is None and len(steps) >= 2 * MIN_FRAMES_PER_WORKER:
-        from episodes.render_desk import standby_helper
+        from episodes.render_desk import standby_helpers
 
-        pool = standby_helper()     # in a batch's spawned process: the batch's own, once it has nothing left
-        helpers = 1 if pool is not None else 0
+        pool = standby_helpers()     # in a batch: its other processes, once they have nothing left to take
+        helpers = pool.count if pool is not None else 0
     if pool is not None:
         with pool.job(replay_path, profile, steps, helpers) as job:
             stats = _render_steps(replay_path, profile, steps, out_path, job)

@@ -4,6 +4,8 @@ writes) and a spawned process plays the batch's own, helping from its side of th
 is the one-worker file whoever renders which frame, and a render nobody helps is rendered alone."""
 
 import multiprocessing
+import os
+import signal
 import time
 
 import pytest
@@ -26,13 +28,10 @@ def replay(raw_path, tmp_path_factory):
     return out
 
 
-def _help_until_stopped(desks, go, stop, helped) -> None:
-    """The batch's own process, once it has nothing left to take (`go`): help whatever render is posted."""
+def _help_once_idle(desks, go, helped) -> None:
+    """The batch's process 0, once it has nothing left to take (`go`): help the others until the batch ends."""
     go.wait(60)
-    while not stop.is_set():
-        if not desks.help_one():
-            time.sleep(0.01)
-    helped.put(desks.frames_helped)
+    helped.put(desks.help_until_finished(0))
 
 
 class _WaitingForTheHelper(ReplayFrames):
@@ -41,7 +40,7 @@ class _WaitingForTheHelper(ReplayFrames):
 
     def capture(self, i):
         deadline = time.monotonic() + 60
-        while render_desk.standby_helper()._state[NEXT] < 3 and time.monotonic() < deadline:
+        while render_desk.standby_helpers()._state[NEXT] < 3 and time.monotonic() < deadline:
             time.sleep(0.01)
         return super().capture(i)
 
@@ -52,12 +51,11 @@ def test_the_batch_process_helps_a_posted_render_and_the_file_is_the_one_worker_
     assert one["workers"] == 1 and one["frames"] >= 2 * render_desk.MIN_FRAMES_LEFT
 
     ctx = multiprocessing.get_context("spawn")
-    desks = render_desk.Desks(ctx, 1)
-    go, stop, helped = ctx.Event(), ctx.Event(), ctx.SimpleQueue()
-    batch = ctx.Process(target=_help_until_stopped, args=(desks, go, stop, helped), daemon=True)
+    desks = render_desk.Desks(ctx, 2)
+    go, helped = ctx.Event(), ctx.SimpleQueue()
+    batch = ctx.Process(target=_help_once_idle, args=(desks, go, helped), daemon=True)
     batch.start()
-    monkeypatch.setattr(render_desk, "_standby", None)
-    render_desk.take_desk(*desks.for_workers())      # this process: the batch's spawned one
+    assert render_desk.take_desk(desks) == 1      # this process: the batch's spawned one
     try:
         # the batch's process is busy: the render runs alone and does not wait for it
         alone = render_to_file(replay, TINY, tmp_path / "alone.render.h5")
@@ -66,12 +64,57 @@ def test_the_batch_process_helps_a_posted_render_and_the_file_is_the_one_worker_
         monkeypatch.setattr(stages, "ReplayFrames", _WaitingForTheHelper)
         shared = render_to_file(replay, TINY, tmp_path / "shared.render.h5")
     finally:
-        stop.set()
+        desks.finished.value = 1
         batch.join(timeout=60)
+        render_desk.leave_desk()
     assert shared["workers"] == 2 and 0 < shared["helper_frames"] < shared["frames"]
     assert helped.get() == shared["helper_frames"]
     assert {file_sha256(tmp_path / f"{n}.render.h5") for n in ("alone", "shared")} == {
         file_sha256(tmp_path / "one.render.h5")}
+
+
+class _KillingTheHelper(ReplayFrames):
+    """The writer's own renderer, which kills the helping process once it has taken frames."""
+
+    helper_pid = 0
+
+    def capture(self, i):
+        deadline = time.monotonic() + 60
+        while render_desk.standby_helpers()._state[NEXT] < 3 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        if self.helper_pid:
+            os.kill(self.helper_pid, signal.SIGKILL)     # some of its frames may be sent, some lost
+            _KillingTheHelper.helper_pid = 0
+        return super().capture(i)
+
+
+def _waited_too_long(signum, frame):
+    raise TimeoutError("the writer still waits for a helper that was killed")
+
+
+def test_a_helping_process_that_dies_mid_render_costs_time_not_bytes(replay, tmp_path, monkeypatch):
+    one = render_to_file(replay, TINY, tmp_path / "one.render.h5")
+    ctx = multiprocessing.get_context("spawn")
+    desks = render_desk.Desks(ctx, 2)
+    go, helped = ctx.Event(), ctx.SimpleQueue()
+    batch = ctx.Process(target=_help_once_idle, args=(desks, go, helped), daemon=True)
+    batch.start()
+    render_desk.take_desk(desks)
+    try:
+        go.set()
+        monkeypatch.setattr(_KillingTheHelper, "helper_pid", batch.pid)
+        monkeypatch.setattr(stages, "ReplayFrames", _KillingTheHelper)
+        # its zombie is not reaped here; a writer that took it for alive would wait for its frames forever
+        signal.signal(signal.SIGALRM, _waited_too_long)
+        signal.alarm(120)
+        info = render_to_file(replay, TINY, tmp_path / "killed.render.h5")
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, signal.SIG_DFL)
+        render_desk.leave_desk()
+        batch.join(timeout=60)
+    assert info["frames"] == one["frames"] and info["helper_frames"] == 0
+    assert file_sha256(tmp_path / "killed.render.h5") == file_sha256(tmp_path / "one.render.h5")
 
 
 def test_a_posted_render_is_the_latest_one_and_one_too_large_is_not_posted():
