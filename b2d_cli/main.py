@@ -158,8 +158,9 @@ def record(task, embodiment, episodes, out_dir, first_index, max_steps, operator
 @click.option("--out", "out_dir", required=True, type=click.Path(path_type=Path))
 @click.option("--max-frames", default=None, type=click.IntRange(min=1), help="Render at most this many frames per episode.")
 @click.option("--workers", default=1, show_default=True, type=click.IntRange(min=1),
-              help="Processes: several recordings run whole in that many at once; one recording shares its "
-                   "render between them (same arrays for any count).")
+              help="Processes: several recordings run whole in that many at once, and one with none left "
+                   "helps render the others' last ones; one recording shares its render between them (same "
+                   "arrays for any count).")
 @click.option("--drift-bound-m", default=0.005, show_default=True, type=click.FloatRange(min=0.0),
               help="Flag frames whose replayed object positions drift further than this from the recording.")
 def replay(raw, profile, out_dir, max_frames, workers, drift_bound_m) -> None:

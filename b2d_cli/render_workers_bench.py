@@ -95,7 +95,7 @@ def cold_start_figures(raw_path: Path, profile, workers: int, out_dir: Path, rep
     walls: dict[str, list[float]] = {w: [] for w in ways}
     files: dict[str, str] = {}
     for r in range(repeats):
-        for way in ways[r % 3:] + ways[:r % 3]:
+        for way in ways[r % len(ways):] + ways[:r % len(ways)]:
             close_shared_helpers()
             t0 = time.perf_counter()
             files[way] = file_sha256(run(way))
@@ -114,9 +114,10 @@ def cold_start_figures(raw_path: Path, profile, workers: int, out_dir: Path, rep
 
 
 def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: int = 6, repeats: int = 2) -> dict:
-    """`b2d replay` of ``files`` recordings (copies of one, under their own names) three ways: one worker;
+    """`b2d replay` of ``files`` recordings (copies of one, under their own names) four ways: one worker;
     ``workers`` sharing each recording's render (render helpers, started as the first replay begins);
-    ``workers`` processes replaying whole recordings (episodes/replay_batch.py). Each way starts with no
+    ``workers`` processes replaying whole recordings (episodes/replay_batch.py), with and without a process
+    that has none left to take helping render the others' (episodes/render_desk.py). Each way starts with no
     helper or worker process up, as a fresh `b2d replay` does. Wall clock (medians over ``repeats``
     rounds in rotated order) and every process's CPU seconds (this one's and its children's)."""
     import resource
@@ -140,9 +141,11 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
         shutil.rmtree(out, ignore_errors=True)
         close_shared_helpers()
         t0, cpu0, child0 = time.perf_counter(), time.process_time(), children_cpu()
-        if way == "whole_recordings":
-            done = list(replay_recordings(raws, profile, out, workers=workers, shared=shared))
-            helped.append(shared["frames_helped"])
+        if way.startswith("whole_recordings"):
+            helping = way == "whole_recordings"
+            done = list(replay_recordings(raws, profile, out, workers=workers, shared=shared, help_others=helping))
+            if helping:
+                helped.append(shared["frames_helped"])
         else:   # each recording in turn: alone, or (the way before) its render shared with helpers
             n = 1 if way == "one_worker" else workers
             done = [result for raw in raws for result in replay_recordings([raw], profile, out, workers=n)]
@@ -155,12 +158,12 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
 
     shared: dict = {}
     helped: list[int] = []      # per run: frames this process rendered for the spawned ones' recordings
-    ways = ["one_worker", "render_shared", "whole_recordings"]
+    ways = ["one_worker", "render_shared", "whole_recordings_no_help", "whole_recordings"]
     walls: dict[str, list[float]] = {w: [] for w in ways}
     cpus: dict[str, list[float]] = {w: [] for w in ways}
     hashes: dict[str, list[str]] = {}
     for r in range(repeats):
-        for way in ways[r % 3:] + ways[:r % 3]:
+        for way in ways[r % len(ways):] + ways[:r % len(ways)]:
             wall, cpu, hashes[way] = run(way)
             walls[way].append(round(wall, 3))
             cpus[way].append(round(cpu, 3))
@@ -170,12 +173,14 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
         "wall_s_median": wall, "wall_s": walls, "cpu_s": cpus,
         "speedup_vs_one_worker": {w: round(wall["one_worker"] / wall[w], 3) for w in ways[1:]},
         "whole_recordings_vs_render_shared": round(wall["render_shared"] / wall["whole_recordings"], 3),
+        "help_vs_no_help": round(wall["whole_recordings_no_help"] / wall["whole_recordings"], 3),
         "whole_recordings_frames_helped": helped,
         "episodes_identical": len({tuple(h) for h in hashes.values()}) == 1,
         "note": ("replay + render + assemble of every recording, from no helper or worker process up; "
                  "render_shared: the recordings in turn, each render shared with helper processes (the only "
-                 "way before stop 35); whole_recordings: each of `workers` processes replays whole recordings, and once this one has "
-                 "none left it helps render the others' (frames_helped: how many frames it rendered for them); "
+                 "way before stop 35); whole_recordings: each of `workers` processes replays whole recordings, and one with none "
+                 "left to take helps render the others' (frames_helped: how many frames were rendered so); "
+                 "whole_recordings_no_help: the same without that help (the way before stop 38); "
                  "wall clock, so other processes' load counts; cpu_s includes the processes' start-up"),
     }
 

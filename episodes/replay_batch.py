@@ -35,12 +35,12 @@ log = logging.getLogger(__name__)
 
 def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Path, workers: int = 1,
                       max_frames: int | None = None, drift_bound_m: float = DEFAULT_DRIFT_BOUND_M,
-                      shared: dict | None = None) -> Iterator[tuple[Path, Outcome]]:
+                      shared: dict | None = None, help_others: bool = True) -> Iterator[tuple[Path, Outcome]]:
     """``(raw path, episode path or the error it met)`` for each recording, in the order given; one that
     fails never stops the others. With ``workers`` > 1 and more than one recording, whole recordings
     run on that many processes (this one included); one recording shares its render between them.
-    ``shared`` (benchmarks) gets ``frames_helped``: the frames this process rendered for the others'
-    recordings once it had none left to take."""
+    ``shared`` (benchmarks) gets ``frames_helped``: the frames processes with none left to take rendered
+    for the others' recordings; ``help_others=False`` (benchmarks: the way before) leaves them waiting."""
     paths, out_dir = [Path(p) for p in raw_paths], Path(out_dir)
     options = {"max_frames": max_frames, "drift_bound_m": drift_bound_m}
     if workers <= 1 or len(paths) < 2:
@@ -57,7 +57,8 @@ def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Pa
         seen.add(path.name)
     done: dict[int, Outcome] = {}
     given = 0
-    for i, outcome in _whole_recordings(first, profile, out_dir, options, min(workers, len(first)), shared):
+    for i, outcome in _whole_recordings(first, profile, out_dir, options, min(workers, len(first)), shared,
+                                        help_others):
         done[i] = outcome
         while given in done:            # in the order given, as soon as each is ready
             yield paths[given], done.pop(given)
@@ -67,7 +68,8 @@ def replay_recordings(raw_paths: list[Path], profile: SensorProfile, out_dir: Pa
 
 
 def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out_dir: Path, options: dict,
-                      processes: int, shared: dict | None = None) -> Iterator[tuple[int, Outcome]]:
+                      processes: int, shared: dict | None = None,
+                      help_others: bool = True) -> Iterator[tuple[int, Outcome]]:
     """``(index, outcome)`` of each item as it finishes: this process and ``processes`` - 1 spawned ones
     take the next recording from one queue; a process with none left to take helps render the others'
     (episodes/render_desk.py). A spawned process that dies (out of memory, a crash in a native library)
@@ -96,14 +98,17 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
                     "replay it again, with --workers 1 to find the recording at fault")))
             except Exception as exc:     # e.g. a result that could not be passed back
                 finished.put((item[0], exc))
+        if desks is None:
+            return
         try:      # nothing left to take: the process this feeder fed helps the others' renders
             helped.append(pool.submit(help_until_finished).result())
         except Exception:            # a broken pool: the recordings it had report it; helping costs only time
             log.debug("a spawned process stopped helping", exc_info=True)
 
     ctx = multiprocessing.get_context("spawn")
-    desks = Desks(ctx, processes)
-    take_desk(desks, 0)              # this process's renders are open to help too
+    desks = Desks(ctx, processes) if help_others else None
+    if desks is not None:
+        take_desk(desks, 0)          # this process's renders are open to help too
     pool = ProcessPoolExecutor(processes - 1, mp_context=ctx, initializer=_start_replay_worker,
                                initargs=(os.getpid(), desks))
     feeders = [threading.Thread(target=feed, args=(pool,), name=f"replay-feeder-{k}", daemon=True)
@@ -120,10 +125,10 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
             # what is done so far; with nothing left to take, help the spawned processes' renders while
             # waiting for what they have in hand
             while given < len(items) and (item is None or not finished.empty()):
-                if item is None and finished.empty() and desks.help_one(0):
+                if item is None and finished.empty() and desks is not None and desks.help_one(0):
                     continue
                 try:
-                    result = finished.get(timeout=HELP_POLL_S if item is None else None)
+                    result = finished.get(timeout=HELP_POLL_S if item is None and desks else None)
                 except queue.Empty:
                     continue
                 if result is None:       # a recording handed back: take it
@@ -133,18 +138,21 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
     finally:
         with lock:                       # abandoned early: nothing more is started
             waiting.clear()
-        desks.finished.value = 1         # helping processes stop
+        if desks is not None:
+            desks.finished.value = 1     # helping processes stop
         pool.shutdown(wait=given == len(items), cancel_futures=True)
-        leave_desk()
+        if desks is not None:
+            leave_desk()
         if shared is not None:
-            shared["frames_helped"] = desks.frames_helped + sum(helped)
+            shared["frames_helped"] = (desks.frames_helped if desks else 0) + sum(helped)
 
 
-def _start_replay_worker(parent_pid: int, desks: Desks) -> None:
+def _start_replay_worker(parent_pid: int, desks: Desks | None) -> None:
     """A spawned process's start: it dies with this one, renders on one core and posts its renders at
     its desk."""
     start_worker(parent_pid, one_core)
-    take_desk(desks)
+    if desks is not None:
+        take_desk(desks)
 
 
 def _replay_one(path: Path, profile: SensorProfile, out_dir: Path, options: dict, workers: int) -> Outcome:

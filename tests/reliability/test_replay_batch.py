@@ -4,6 +4,8 @@ spawned process comes back as the same error."""
 
 import pickle
 
+import pytest
+
 from episodes.atomic import file_sha256
 from episodes.replay_batch import replay_recordings
 from evaluation.errors import TaskSpecError
@@ -12,12 +14,16 @@ from sim.errors import SpecError, UnknownNameError
 from tactile.errors import TactileSpecError
 
 
-def test_whole_recordings_on_two_processes_give_the_one_worker_episodes(raw_dir, tiny_profile, tmp_path):
+@pytest.mark.parametrize("help_others", [True, False])
+def test_whole_recordings_on_two_processes_give_the_one_worker_episodes(raw_dir, tiny_profile, tmp_path, help_others):
     raws = sorted(raw_dir.glob("*.raw.h5"))
     missing = tmp_path / "episode_0009.raw.h5"
     inputs = [raws[1], missing, raws[0]]
     one = list(replay_recordings(inputs, tiny_profile, tmp_path / "one", workers=1))
-    two = list(replay_recordings(inputs, tiny_profile, tmp_path / "two", workers=2))
+    shared = {}
+    two = list(replay_recordings(inputs, tiny_profile, tmp_path / "two", workers=2, shared=shared,
+                                 help_others=help_others))
+    assert help_others or shared["frames_helped"] == 0      # without help, nobody renders for another
     assert [p for p, _ in two] == inputs
     for (_, a), (_, b) in zip(one, two):
         if isinstance(a, Exception):
