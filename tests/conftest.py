@@ -22,6 +22,16 @@ def raw_path(raw_dir):
     return sorted(raw_dir.glob("*.raw.h5"))[0]
 
 
+@pytest.fixture(scope="session")
+def replay_path(raw_path, tmp_path_factory):
+    """`raw_path` replayed (the physics state per control step), for the render tests; read only."""
+    from episodes.stages import replay_to_file
+
+    out = tmp_path_factory.mktemp("replay") / "e.replay.h5"
+    replay_to_file(raw_path, out)
+    return out
+
+
 @pytest.fixture(autouse=True)
 def _stop_signals_stay_default(request):
     """A library that leaves SIGTERM ignored in this worker process passes that on to every child a later

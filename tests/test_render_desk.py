@@ -8,24 +8,15 @@ import os
 import signal
 import time
 
-import pytest
-
 from episodes import render_desk, stages
 from episodes.atomic import file_sha256
 from episodes.render_pool import NEXT
 from episodes.replay_frames import ReplayFrames
-from episodes.stages import render_to_file, replay_to_file
+from episodes.stages import render_to_file
 from sim.registry import parse_sensor_profile
 from tiny_profile import TINY as TINY_FIELDS
 
 TINY = parse_sensor_profile(TINY_FIELDS)
-
-
-@pytest.fixture(scope="module")
-def replay(raw_path, tmp_path_factory):
-    out = tmp_path_factory.mktemp("desk") / "e.replay.h5"
-    replay_to_file(raw_path, out)
-    return out
 
 
 def _help_once_idle(desks, go, helped) -> None:
@@ -45,9 +36,9 @@ class _WaitingForTheHelper(ReplayFrames):
         return super().capture(i)
 
 
-def test_the_batch_process_helps_a_posted_render_and_the_file_is_the_one_worker_file(replay, tmp_path,
+def test_the_batch_process_helps_a_posted_render_and_the_file_is_the_one_worker_file(replay_path, tmp_path,
                                                                                       monkeypatch):
-    one = render_to_file(replay, TINY, tmp_path / "one.render.h5")
+    one = render_to_file(replay_path, TINY, tmp_path / "one.render.h5")
     assert one["workers"] == 1 and one["frames"] >= 2 * render_desk.MIN_FRAMES_LEFT
 
     ctx = multiprocessing.get_context("spawn")
@@ -58,11 +49,11 @@ def test_the_batch_process_helps_a_posted_render_and_the_file_is_the_one_worker_
     assert render_desk.take_desk(desks) == 1      # this process: the batch's spawned one
     try:
         # the batch's process is busy: the render runs alone and does not wait for it
-        alone = render_to_file(replay, TINY, tmp_path / "alone.render.h5")
+        alone = render_to_file(replay_path, TINY, tmp_path / "alone.render.h5")
         assert alone["workers"] == 1 and alone["helper_frames"] == 0
         go.set()
         monkeypatch.setattr(stages, "ReplayFrames", _WaitingForTheHelper)
-        shared = render_to_file(replay, TINY, tmp_path / "shared.render.h5")
+        shared = render_to_file(replay_path, TINY, tmp_path / "shared.render.h5")
     finally:
         desks.finished.value = 1
         batch.join(timeout=60)
@@ -92,8 +83,8 @@ def _waited_too_long(signum, frame):
     raise TimeoutError("the writer still waits for a helper that was killed")
 
 
-def test_a_helping_process_that_dies_mid_render_costs_time_not_bytes(replay, tmp_path, monkeypatch):
-    one = render_to_file(replay, TINY, tmp_path / "one.render.h5")
+def test_a_helping_process_that_dies_mid_render_costs_time_not_bytes(replay_path, tmp_path, monkeypatch):
+    one = render_to_file(replay_path, TINY, tmp_path / "one.render.h5")
     ctx = multiprocessing.get_context("spawn")
     desks = render_desk.Desks(ctx, 2)
     go, helped = ctx.Event(), ctx.SimpleQueue()
@@ -107,7 +98,7 @@ def test_a_helping_process_that_dies_mid_render_costs_time_not_bytes(replay, tmp
         # its zombie is not reaped here; a writer that took it for alive would wait for its frames forever
         signal.signal(signal.SIGALRM, _waited_too_long)
         signal.alarm(120)
-        info = render_to_file(replay, TINY, tmp_path / "killed.render.h5")
+        info = render_to_file(replay_path, TINY, tmp_path / "killed.render.h5")
     finally:
         signal.alarm(0)
         signal.signal(signal.SIGALRM, signal.SIG_DFL)

@@ -35,13 +35,6 @@ def _arrays(path) -> dict[str, bytes]:
     return out
 
 
-@pytest.fixture(scope="module")
-def replay_path(raw_path, tmp_path_factory):
-    out = tmp_path_factory.mktemp("replay") / "e.replay.h5"
-    replay_to_file(raw_path, out)
-    return out
-
-
 def test_two_workers_render_the_same_arrays_as_one(replay_path, tmp_path):
     profile = parse_sensor_profile(TINY)
     one = render_to_file(replay_path, profile, tmp_path / "one.render.h5", workers=1)

@@ -20,24 +20,17 @@ TINY = parse_sensor_profile(TINY_FIELDS)
 
 
 @pytest.fixture(scope="module")
-def replay(raw_path, tmp_path_factory):
-    out = tmp_path_factory.mktemp("pool") / "e.replay.h5"
-    replay_to_file(raw_path, out)
-    return out
-
-
-@pytest.fixture(scope="module")
-def one_worker_sha(replay, tmp_path_factory):
+def one_worker_sha(replay_path, tmp_path_factory):
     out = tmp_path_factory.mktemp("one") / "one.render.h5"
-    assert render_to_file(replay, TINY, out)["workers"] == 1
+    assert render_to_file(replay_path, TINY, out)["workers"] == 1
     return file_sha256(out)
 
 
-def test_a_render_does_not_wait_for_helpers_to_start(replay, one_worker_sha, tmp_path):
+def test_a_render_does_not_wait_for_helpers_to_start(replay_path, one_worker_sha, tmp_path):
     # a fresh process's helpers need ~1.5 CPU-s to start (imports, GL); 18 tiny frames take far less, so
     # the writer renders them all alone instead of waiting, and the file is the same
     render_pool.close_shared_helpers()
-    info = render_to_file(replay, TINY, tmp_path / "cold.render.h5", workers=2)
+    info = render_to_file(replay_path, TINY, tmp_path / "cold.render.h5", workers=2)
     pool = shared_helpers(1, wait=False)
     assert not pool.ready(0) and info["helper_frames"] == 0 and info["workers"] == 1
     assert file_sha256(tmp_path / "cold.render.h5") == one_worker_sha
@@ -55,33 +48,33 @@ class _WaitingForHelpers(ReplayFrames):
         return super().capture(i)
 
 
-def test_frames_from_helpers_give_the_one_worker_file_byte_for_byte(replay, one_worker_sha, tmp_path, monkeypatch):
+def test_frames_from_helpers_give_the_one_worker_file_byte_for_byte(replay_path, one_worker_sha, tmp_path, monkeypatch):
     monkeypatch.setattr(stages, "ReplayFrames", _WaitingForHelpers)
-    info = render_to_file(replay, TINY, tmp_path / "two.render.h5", workers=2)
+    info = render_to_file(replay_path, TINY, tmp_path / "two.render.h5", workers=2)
     assert info["workers"] == 2 and 0 < info["helper_frames"] < info["frames"] == 18
     assert len(info["frame_windows"]) == 2 and info["helper_cpu_s"] > 0
     assert file_sha256(tmp_path / "two.render.h5") == one_worker_sha
 
 
 def test_helpers_are_kept_across_calls_one_killed_mid_render_changes_no_byte_and_is_replaced(
-        replay, one_worker_sha, tmp_path, monkeypatch):
-    render_to_file(replay, TINY, tmp_path / "a.render.h5", workers=2)
+        replay_path, one_worker_sha, tmp_path, monkeypatch):
+    render_to_file(replay_path, TINY, tmp_path / "a.render.h5", workers=2)
     pool = shared_helpers(1)
     pid = pool._procs[0].pid
-    render_to_file(replay, TINY, tmp_path / "b.render.h5", workers=2)
+    render_to_file(replay_path, TINY, tmp_path / "b.render.h5", workers=2)
     assert shared_helpers(1) is pool and pool._procs[0].pid == pid      # the same warm process
     steps = frame_steps(18, TINY.rate_hz)
-    with pool.job(replay, TINY, steps, helpers=1) as job:
+    with pool.job(replay_path, TINY, steps, helpers=1) as job:
         deadline = time.monotonic() + 60     # the helper takes frames until MAX_AHEAD holds it back
         while pool._state[render_pool.NEXT] < render_pool.MAX_AHEAD and time.monotonic() < deadline:
             time.sleep(0.01)
         os.kill(pid, signal.SIGKILL)      # some of its frames may be sent, some lost
-        stats = stages._render_steps(replay, TINY, steps, tmp_path / "c.render.h5", job)
+        stats = stages._render_steps(replay_path, TINY, steps, tmp_path / "c.render.h5", job)
     assert stats["helper_frames"] == 0 and not pool.alive()
-    render_to_file(replay, TINY, tmp_path / "d.render.h5", workers=2)     # starts a replacement
+    render_to_file(replay_path, TINY, tmp_path / "d.render.h5", workers=2)     # starts a replacement
     assert shared_helpers(1) is not pool
     monkeypatch.setattr(stages, "ReplayFrames", _WaitingForHelpers)
-    info = render_to_file(replay, TINY, tmp_path / "e.render.h5", workers=2)     # which takes part once up
+    info = render_to_file(replay_path, TINY, tmp_path / "e.render.h5", workers=2)     # which takes part once up
     assert info["workers"] == 2
     assert {file_sha256(tmp_path / f"{n}.render.h5") for n in "abcde"} == {one_worker_sha}
 
