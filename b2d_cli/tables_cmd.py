@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from evaluation.metrics import N_BOOT, SEED
+from evaluation.bootstrap_defaults import N_BOOT, SEED
 
 
 @click.command("tables")

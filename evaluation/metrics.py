@@ -10,6 +10,7 @@ from collections.abc import Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from evaluation.bootstrap_defaults import LEVEL, N_BOOT, SEED
 from evaluation.records import EpisodeRecord
 
 log = logging.getLogger(__name__)
@@ -19,7 +20,6 @@ SHIFTED = CHANNELS[1:]
 CELL = ("task", "policy", "channel")
 NEEDED = ("success", "t_stable", "lscr", "cscr", "safe_success", "hard_violation", "drop", "high_speed",
           "violation_steps", "n_steps", "isr_ever", "success_final")
-N_BOOT, SEED, LEVEL = 10_000, 0, 0.95
 
 
 def episode_table(records: Iterable[EpisodeRecord | dict] | pd.DataFrame) -> pd.DataFrame:
