@@ -17,7 +17,8 @@ import os
 import pickle
 import time
 
-from episodes.render_pool import JOB, MAX_AHEAD, NEXT, STATE_SLOTS, TOTAL, WRITTEN, HelperChannels, _Sender, help_render
+from episodes.frame_messages import FrameSender
+from episodes.render_pool import JOB, MAX_AHEAD, NEXT, STATE_SLOTS, TOTAL, WRITTEN, HelperChannels, help_render
 
 MIN_FRAMES_LEFT = 8      # fewer left: building a scene to help costs more than it saves
 STALL_S = 30.0           # held back this long with no frame written: the render's process is stuck or gone
@@ -77,7 +78,7 @@ class Desk:
     def help(self, slot: int) -> int:
         """Render frames of the render under way, as helper `slot`, until none is left; the number rendered."""
         self.helper_pids[slot] = os.getpid()
-        out, written, since = _Sender(self.writers[slot]), -1, time.monotonic()
+        out, written, since = FrameSender(self.writers[slot]), -1, time.monotonic()
 
         def still_wanted() -> bool:      # asked while the render's process holds this one back
             nonlocal written, since
