@@ -86,7 +86,7 @@ class ScriptedOperator:
             start = STAGGER_STEPS if side == "left" else 0
             self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
                                 "closed": closed, "group": group, "grasp_centre": grasp.centre,
-                                "hand": hand.name,
+                                "tabletop": hand.tabletop_grasp is not None, "hand": hand.name,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
                                 "looks": [], "q": q_home.copy(), "q_home": q_home.copy(),
                                 "timeline": SideTimeline(pos0, quat0, open_, start),

@@ -18,7 +18,7 @@ from sim.errors import SpecError
 from teleop.operator_motion import DURATIONS, UP, SideTimeline, pitched_palm_down, quat, yawed
 from teleop.plan_steps.front_place import CEILING_GAP_M, OUTSIDE_M, SLIDE_STEPS, side_opening
 from teleop.plan_steps.operator import PlanningOperator
-from teleop.plan_steps.pick_place import (CLOSED, PALM_NORMAL, SIDE_GRASP_IN_M, WALL, approach_pitch, grasp_point,
+from teleop.plan_steps.pick_place import (PALM_NORMAL, SIDE_GRASP_IN_M, approach_pitch, grasp_point, power_closing,
                                          side_grasp_offset, side_roll, turned_about_fingers)
 from teleop.transit import bounding_box_points, hand_outline
 
@@ -80,8 +80,8 @@ def take_out_front(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
                quat=quat(hand_rot), hand=side["open"])
     tl.add(SLIDE_STEPS, pos=beside)
     tl.add(DURATIONS["descend"], pos=grasp)
-    tl.add(DURATIONS["close"], hand=op.power(side, WALL))
-    tl.add(DURATIONS["close_late"], hand=op.power(side, CLOSED))
+    for duration, targets, _ in power_closing(op, side, item):
+        tl.add(duration, hand=targets)
     tl.add(DURATIONS["hold"])
     room = way.ceiling - CEILING_GAP_M - float(grasp[2] + closed_pts[:, 2].max())
     lifted = grasp + float(np.clip(room, 0.0, TAKE_LIFT_M)) * UP

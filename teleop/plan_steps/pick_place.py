@@ -153,12 +153,20 @@ def power_closing(op: PlanningOperator, side: dict, item: dict) -> list:
     """A palm grasp's closing keyframes: the early actuators form a wall, then the late ones press the object
     against it. `close_thumb_last: true` makes the thumb's actuators (those moving its tip) the late ones,
     whatever the hand file declares: on the Wuji a thumb closing with the fingers reached a 5.4 cm lemon
-    first and flicked it out on the lift (citrus_plate_loading)."""
+    first and flicked it out on the lift (citrus_plate_loading). `grasp_closure` (a handover's) closes a
+    hand's declared tabletop grasp, sized for fruit, that many times as far from open (within the actuators'
+    ranges), so that a thinner part is squeezed, not only surrounded: the Shadow's and the Wuji's closed round
+    a bottle's 3 cm neck without touching it. A hand's power grasp is left as it is (it curls round a bar)."""
     if item.get("close_thumb_last"):
         wall = np.where(thumb_actuators(side["hand"]), side["open"], side["closed"])
     else:
         wall = op.power(side, WALL)
-    return [(DURATIONS["close"], wall, None), (DURATIONS["close_late"], op.power(side, CLOSED), None)]
+    closed = op.power(side, CLOSED)
+    scale = item.get("grasp_closure")
+    if scale is not None and side["tabletop"]:    # a power grasp curls round a bar already
+        lo, hi = op.scene.model.actuator_ctrlrange[side["hand_ids"]].T
+        wall, closed = (np.clip(side["open"] + scale * (t - side["open"]), lo, hi) for t in (wall, closed))
+    return [(DURATIONS["close"], wall, None), (DURATIONS["close_late"], closed, None)]
 
 
 def side_roll(item: dict) -> float:

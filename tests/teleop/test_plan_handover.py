@@ -52,6 +52,7 @@ def test_a_handover_chain_parses(tmp_path):
     ({**GIVE, "grasp": "power", "grasp_point": None}, r"pick_from'.*only with grasp: side"),
     ({**GIVE, "at": [0.0, 0.3]}, r"at'.*\[x, y, z\] of the table top"),
     ({**GIVE, "take_roll_deg": 150}, r"take_roll_deg'.*degrees in \[60, 135\]"),
+    ({**GIVE, "grasp_closure": 2.0}, r"grasp_closure'.*a factor in \[1, 1.5\]"),
     ({**GIVE, "handover": "sofa"}, r"handover'.*an object from \['fridge', 'glass', 'wine_bottle'\]"),
     ({**POUR, "hold": 1}, r"hold'"),
 ])
@@ -133,3 +134,18 @@ def test_a_pour_from_the_other_hands_bottle_needs_a_place_or_a_hold(tmp_path):
     place_offset is refused when the operator plans it."""
     with pytest.raises(SpecError, match="sets it down at place_offset"):
         _planned([GIVE, {k: v for k, v in POUR.items() if k != "hold"}], tmp_path, door=False)
+
+
+@pytest.mark.parametrize(("embodiment", "tabletop"), [("ur5_wuji", True), ("ur5_schunk", False)])
+def test_grasp_closure_closes_a_tabletop_grasp_further(tmp_path, embodiment, tabletop):
+    """`grasp_closure` takes the giver's declared tabletop grasp that many times as far from open, within the
+    actuators' ranges (the Wuji's closed round the bottle's neck untouched); a power grasp is left as it is."""
+    task = _task([{**GIVE, "grasp_closure": 1.3}], tmp_path)
+    data, op = home_and_plan(demonstration_scene(task, embodiment))
+    left = op.sides["left"]
+    # the giver's most closed keyframe: the neck grasp's
+    held = max((f.hand for f in left["timeline"].frames), key=lambda hand: float(np.abs(hand - left["open"]).sum()))
+    assert left["tabletop"] is tabletop
+    lo, hi = op.scene.model.actuator_ctrlrange[left["hand_ids"]].T
+    expected = np.clip(left["open"] + 1.3 * (left["closed"] - left["open"]), lo, hi) if tabletop else left["closed"]
+    np.testing.assert_allclose(held, expected)

@@ -41,6 +41,7 @@ CARRY_RANGE_S = (0.0, 10.0)     # carry_s: a pick's carry, above 0 and at most 1
 OPEN_RANGE_S = (0.0, 3.0)       # open_s: a pick's hand opening over its place before it rises, above 0 and at most 3 s
 TOE_IN_RANGE_DEG = (0.0, 30.0)  # toe_in_deg: a carry's fingers turned in towards the object, level .. 30 degrees
 SLIDE_CLEARANCE_RANGE_M = (0.0, 0.15)   # slide_clearance_m: a front place's object bottom over the cavity floor
+GRASP_CLOSURE_RANGE = (1.0, 1.5)     # grasp_closure: a handover giver's tabletop grasp closed up to 1.5 times as far
 
 
 # place_from: front: the object's bottom this far above the cavity floor as it slides in (default 4 cm)
