@@ -9,6 +9,8 @@ left to take helps the posted render with the most frames left, as a render help
 stays byte-identical to a one-worker replay; a render nobody helps is rendered alone, as before.
 
 Processes are numbered 0 (the batch's own) to N-1; on a desk, the helper slots are the other processes'.
+Each process keeps only the pipe ends it uses (its own desk's readers, its slot's writer on the others'),
+so a process that dies is end-of-file to every process it was sending to.
 """
 
 from __future__ import annotations
@@ -20,9 +22,11 @@ import time
 from episodes.frame_messages import FrameSender
 from episodes.render_pool import JOB, MAX_AHEAD, NEXT, STATE_SLOTS, TOTAL, WRITTEN, HelperChannels, help_render
 
+MAX_PROCESSES = 8        # desks cost 2 N (N - 1) pipe ends in the batch's process; on more, the tail matters less
 MIN_FRAMES_LEFT = 8      # fewer left: building a scene to help costs more than it saves
-STALL_S = 30.0           # held back this long with no frame written: the render's process is stuck or gone
+STALL_S = 30.0           # held back this long with no frame written: give up helping that render
 HELP_POLL_S = 0.02       # a process with nothing left looks for a render to help this often
+HELP_SLICE_S = 1.0       # a spawned process helps in calls of about this long (its pool can then shut down)
 
 
 class Posted:
@@ -30,7 +34,7 @@ class Posted:
     posting never blocks (a queue's pipe fills while the others are busy with their own recordings) and
     only the latest one matters."""
 
-    CAPACITY = 1 << 16      # bytes; a render that does not fit is not posted (it renders alone)
+    CAPACITY = 1 << 18      # bytes (~32,000 frames' steps); a render that does not fit renders alone
 
     def __init__(self, ctx):
         self._bytes, self._length, self._lock = ctx.RawArray("B", self.CAPACITY), ctx.RawValue("q", 0), ctx.Lock()
@@ -41,12 +45,12 @@ class Posted:
             if len(data) > self.CAPACITY:
                 self._length.value = 0
                 return
-            self._bytes[:len(data)] = data
+            memoryview(self._bytes).cast("B")[:len(data)] = data
             self._length.value = len(data)
 
     def get(self) -> tuple | None:
         with self._lock:
-            data = bytes(self._bytes[:self._length.value])
+            data = memoryview(self._bytes).cast("B")[:self._length.value].tobytes()
         return pickle.loads(data) if data else None      # written by a process of this batch, in memory
 
 
@@ -61,36 +65,51 @@ class Desk:
         self.readers, self.writers = [r for r, _ in pipes], [w for _, w in pipes]
         self.owner = ctx.RawValue("q", 0)              # the process whose renders these are
         self.helper_pids = ctx.RawArray("q", slots)    # each slot's process, once it has helped
-        self._task: tuple | None = None                # a helper's side: the render posted, once read
+        # a helping process's own view: its sender (one for the batch: a pipe takes one writer), and the
+        # last job it helped (never joined twice: the writer stops reading a helper that has ended)
+        self._sender: FrameSender | None = None
+        self._helped = 0
 
-    def frames_left(self) -> int:
-        """Frames of the render under way that no process has taken yet (0 when none is under way)."""
+    def render_to_help(self) -> tuple[int, tuple | None]:
+        """(frames not yet taken, the task) of the render under way that this process may still help."""
         with self.lock:
             job, left = self.state[JOB], int(self.state[TOTAL] - self.state[NEXT])
-        if not job:
-            return 0
-        if self._task is None or self._task[0] != job:
-            self._task = self.posted.get()     # posted just after the counters were set: maybe not yet
-            if self._task is None or self._task[0] != job:
-                return 0
-        return left
+        if not job or job == self._helped or (self._sender is not None and self._sender.broken):
+            return 0, None
+        task = self.posted.get()        # posted just after the counters were set: maybe not yet
+        if task is None or task[0] != job or not _alive(self.owner.value):
+            return 0, None
+        return left, task
 
-    def help(self, slot: int) -> int:
-        """Render frames of the render under way, as helper `slot`, until none is left; the number rendered."""
+    def help(self, slot: int, task: tuple) -> int:
+        """Render frames of `task` as helper `slot` until none is left (or its writer stalls for STALL_S);
+        the number rendered."""
         self.helper_pids[slot] = os.getpid()
-        out, written, since = FrameSender(self.writers[slot]), -1, time.monotonic()
+        if self._sender is None:
+            self._sender = FrameSender(self.writers[slot])
+        self._helped = task[0]
+        written, since = -1, time.monotonic()
 
         def still_wanted() -> bool:      # asked while the render's process holds this one back
             nonlocal written, since
-            if out.broken or not _alive(self.owner.value):
+            if self._sender.broken or not _alive(self.owner.value):
                 return False
             if self.state[WRITTEN] != written:
                 written, since = self.state[WRITTEN], time.monotonic()
             return time.monotonic() - since < STALL_S
 
-        count = help_render(self._task, slot, out, self.lock, self.state, MAX_AHEAD, still_wanted)
-        out.finish(wait=still_wanted())
-        return count
+        return help_render(task, slot, self._sender, self.lock, self.state, MAX_AHEAD, still_wanted)
+
+    def keep_ends(self, mine: bool, slot: int | None) -> None:
+        """Close the pipe ends this process does not use: on its own desk (`mine`) it only reads; on
+        another's it writes through its `slot` only."""
+        for k, (reader, writer) in enumerate(zip(self.readers, self.writers)):
+            if mine:
+                writer.close()
+            else:
+                reader.close()
+                if k != slot:
+                    writer.close()
 
 
 class Desks:
@@ -98,26 +117,51 @@ class Desks:
     start."""
 
     def __init__(self, ctx, processes: int):
+        if not 2 <= processes <= MAX_PROCESSES:
+            raise ValueError(f"render desks: expected 2 to {MAX_PROCESSES} processes, got {processes}")
+        self.processes = processes
         self.desks = [Desk(ctx, processes - 1) for _ in range(processes)]
         self.claimed, self.claim_lock = ctx.RawValue("i", 1), ctx.Lock()
         self.finished = ctx.RawValue("b", 0)      # the batch has ended: helping processes stop
         self.frames_helped = 0                    # by this process
+        self._ends_kept = False
+
+    def keep_own_ends(self, me: int) -> None:
+        """Process `me` keeps only the pipe ends it uses; process 0 once every spawned one holds its own
+        (their ends cross as they start)."""
+        if self._ends_kept or (me == 0 and self.claimed.value < self.processes):
+            return
+        for d, desk in enumerate(self.desks):
+            desk.keep_ends(d == me, None if d == me else _slot(me, d))
+        self._ends_kept = True
 
     def help_one(self, me: int) -> bool:
         """Help the others' render with the most frames left, if one has enough left to be worth a scene;
         False when none has."""
-        left, d = max(((desk.frames_left(), d) for d, desk in enumerate(self.desks) if d != me), default=(0, 0))
-        if left < MIN_FRAMES_LEFT:
+        self.keep_own_ends(me)
+        most, desk, task = 0, None, None
+        for d in range(self.processes):
+            left, posted = self.desks[d].render_to_help() if d != me else (0, None)
+            if left > most:
+                most, desk, task = left, d, posted
+        if most < MIN_FRAMES_LEFT:
             return False
-        self.frames_helped += self.desks[d].help(me if me < d else me - 1)
+        self.frames_helped += self.desks[desk].help(_slot(me, desk), task)
         return True
 
-    def help_until_finished(self, me: int) -> int:
-        """Help the others' renders until the batch has ended; the frames rendered for them."""
-        while not self.finished.value:
+    def help_for(self, me: int, seconds: float) -> int:
+        """Help the others' renders for about `seconds` (a render under way is helped to its end), or until
+        the batch has ended; the frames rendered for them so far."""
+        end = time.monotonic() + seconds
+        while not self.finished.value and time.monotonic() < end:
             if not self.help_one(me):
                 time.sleep(HELP_POLL_S)
         return self.frames_helped
+
+
+def _slot(me: int, desk: int) -> int:
+    """Process `me`'s helper slot on process `desk`'s desk (a desk has a slot for each other process)."""
+    return me if me < desk else me - 1
 
 
 class StandbyHelpers(HelperChannels):
@@ -151,6 +195,7 @@ def take_desk(desks: Desks, me: int | None = None) -> int:
             me = desks.claimed.value
             desks.claimed.value += 1
     _desks, _me, _standby = desks, me, StandbyHelpers(desks.desks[me])
+    desks.keep_own_ends(me)
     return me
 
 
@@ -161,13 +206,16 @@ def leave_desk() -> None:
 
 def standby_helpers() -> StandbyHelpers | None:
     """This process's desk, while it is one of a batch's processes (else None)."""
+    if _desks is not None:
+        _desks.keep_own_ends(_me)     # process 0: once the spawned ones hold theirs
     return _standby
 
 
-def help_until_finished() -> int:
-    """In a batch's spawned process with nothing left to take: help the others' renders until the batch
-    ends; the frames rendered for them."""
-    return _desks.help_until_finished(_me)
+def help_for_a_while() -> tuple[int, int]:
+    """In a batch's spawned process with nothing left to take: help the others' renders for about
+    HELP_SLICE_S (its feeder calls again until the batch ends); (this process, the frames it has rendered
+    for them so far)."""
+    return os.getpid(), _desks.help_for(_me, HELP_SLICE_S)
 
 
 def _alive(pid: int) -> bool:
@@ -185,4 +233,3 @@ def _alive(pid: int) -> bool:
             return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
     except (OSError, IndexError):        # no /proc (not Linux): taken as running
         return True
-

@@ -41,8 +41,10 @@ log = logging.getLogger(__name__)
 MAX_AHEAD = 8        # frames a renderer may start beyond the last one written (bounds the frames held in memory)
 WAIT_S = 0.002       # a helper held back by MAX_AHEAD looks again after this
 POLL_S = 1.0         # the writer checks that its helpers still live at this interval while it waits
+DRAIN_S = 60.0       # a helper that sends nothing for this long at a job's end is given up
 JOB, NEXT, TOTAL, WRITTEN, JOINED = range(5)     # the shared counters (JOINED: a bit per helper)
 STATE_SLOTS = 5
+MAX_HELPERS = 62     # JOINED is an int64
 
 
 def _take(lock, state, job: int, max_ahead: int, helper: int | None = None) -> int | None:
@@ -150,6 +152,8 @@ class HelperChannels:
     spawned (RenderHelpers), or a batch's process with nothing left to do (episodes/render_desk.py)."""
 
     def __init__(self, count: int, max_ahead: int, lock, state, tasks: list, readers: list):
+        if count > MAX_HELPERS:
+            raise ValueError(f"render helpers: expected at most {MAX_HELPERS}, got {count}")
         self.count, self.max_ahead = count, max_ahead
         self._lock, self._state, self._tasks, self._readers = lock, state, tasks, readers
         self._lost: set[int] = set()     # helpers whose pipe ended or broke
@@ -295,38 +299,54 @@ class _Job:
     def in_order(self, local) -> Iterator[tuple[dict, bool]]:
         """Every frame as (datasets, has error), in index order: the caller's own renderer `local`
         (a ReplayFrames) renders its share, helpers the rest. Should a helper fail or die, the
-        caller renders whatever has not arrived (the same frames, only slower)."""
+        caller renders whatever has not arrived (the same frames, only slower). However it ends (the
+        last frame, an error, the generator closed early), the helpers that took part are read to
+        their end, so that none is left blocked on a full pipe."""
         h, pending, written, alone = self.helpers, {}, 0, not self.open
-        while written < self.total:
-            if not alone and self.open:
-                alone = not h._receive(self.open, self.id, pending, self.stats, 0)
-            if written in pending:
-                yield pending.pop(written)
-                written += 1
-                with h._lock:
-                    h._state[WRITTEN] = written
-                continue
-            if alone:
-                pending[written] = local.capture(written)
-                continue
-            i = _take(h._lock, h._state, self.id, h.max_ahead)
-            if i is not None and i >= 0:
-                pending[i] = local.capture(i)
-            elif i is None and not self.open:
-                alone = True      # a frame taken by a helper that failed: ours now
-            else:
-                alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
-            if alone:
-                with h._lock:
-                    h._state[JOB] = 0       # the others stop too; what is missing is rendered here
+        try:
+            while written < self.total:
+                if not alone and self.open:
+                    alone = not h._receive(self.open, self.id, pending, self.stats, 0)
+                if written in pending:
+                    yield pending.pop(written)
+                    written += 1
+                    with h._lock:
+                        h._state[WRITTEN] = written
+                    continue
+                if alone:
+                    pending[written] = local.capture(written)
+                    continue
+                i = _take(h._lock, h._state, self.id, h.max_ahead)
+                if i is not None and i >= 0:
+                    pending[i] = local.capture(i)
+                elif not self.open:
+                    alone = True      # a frame taken by a helper that has ended or failed: ours now
+                else:
+                    alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
+                if alone:
+                    with h._lock:
+                        h._state[JOB] = 0       # the others stop too; what is missing is rendered here
+        finally:
+            self._hear_the_end()
+
+    def _hear_the_end(self) -> None:
+        """End the job and read every helper that took part to its end (their timings, for benchmarks;
+        they end within a frame). One that took no frame (not started, or busy elsewhere) is not waited
+        for; one silent for DRAIN_S is given up (lost: its pipe may hold half a message)."""
+        h = self.helpers
         with h._lock:
-            h._state[JOB] = 0       # a helper still building its scene skips the job
+            h._state[JOB] = 0       # a helper that has not started building its scene skips the job
             joined = h._state[JOINED]
-        # the timings of the helpers that took part, for benchmarks (they end within a frame); one that
-        # took no frame (still starting, or busy elsewhere) is not waited for
         self.open = {k for k in self.open if joined >> k & 1}
-        while self.open and not alone:
-            alone = not h._receive(self.open, self.id, pending, self.stats, POLL_S)
+        heard = time.monotonic()
+        while self.open:
+            frames, waiting = {}, len(self.open)
+            h._receive(self.open, self.id, frames, self.stats, POLL_S)     # frames dropped: all are written
+            if frames or len(self.open) < waiting:
+                heard = time.monotonic()
+            elif time.monotonic() - heard > DRAIN_S:
+                h._lost.update(self.open)
+            self.open = {k for k in self.open if k not in h._lost and h._helper_alive(k)}
 
 
 # ---------------------------------------------------------------- one set per process

@@ -23,7 +23,7 @@ from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Iterator
 
-from episodes.render_desk import HELP_POLL_S, Desks, help_until_finished, leave_desk, take_desk
+from episodes.render_desk import HELP_POLL_S, MAX_PROCESSES, Desks, help_for_a_while, leave_desk, take_desk
 from episodes.stages import raw_to_episode
 from episodes.workers import one_core, start_worker
 from sim.registry import SensorProfile
@@ -75,7 +75,7 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
     (episodes/render_desk.py). A spawned process that dies (out of memory, a crash in a native library)
     fails the recordings it was given; this one takes the rest."""
     waiting, lock, finished = deque(items), threading.Lock(), queue.SimpleQueue()
-    helped: list[int] = []       # frames each spawned process rendered for the others
+    helped: dict[int, int] = {}     # per spawned process: the frames it has rendered for the others so far
 
     def take() -> tuple[int, Path] | None:
         with lock:
@@ -98,26 +98,29 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
                     "replay it again, with --workers 1 to find the recording at fault")))
             except Exception as exc:     # e.g. a result that could not be passed back
                 finished.put((item[0], exc))
-        if desks is None:
-            return
-        try:      # nothing left to take: the process this feeder fed helps the others' renders
-            helped.append(pool.submit(help_until_finished).result())
-        except Exception:            # a broken pool: the recordings it had report it; helping costs only time
-            log.debug("a spawned process stopped helping", exc_info=True)
+        # nothing left to take: the process this feeder fed helps the others' renders, in short calls so
+        # that the pool can shut down whenever the batch ends (or the interpreter exits)
+        while desks is not None and not desks.finished.value:
+            try:
+                pid, frames = pool.submit(help_for_a_while).result()
+            except Exception:        # a broken pool: the recordings it had report it; helping costs only time
+                log.debug("a spawned process stopped helping", exc_info=True)
+                return
+            helped[pid] = frames
 
     ctx = multiprocessing.get_context("spawn")
-    desks = Desks(ctx, processes) if help_others else None
-    if desks is not None:
-        take_desk(desks, 0)          # this process's renders are open to help too
-    pool = ProcessPoolExecutor(processes - 1, mp_context=ctx, initializer=_start_replay_worker,
-                               initargs=(os.getpid(), desks))
-    feeders = [threading.Thread(target=feed, args=(pool,), name=f"replay-feeder-{k}", daemon=True)
-               for k in range(processes - 1)]
-    one_core()       # this process is one of the workers too (its rendering stays on one core from here on)
-    for feeder in feeders:
-        feeder.start()
-    given = 0
+    desks = Desks(ctx, processes) if help_others and processes <= MAX_PROCESSES else None
+    pool, given = None, 0
     try:
+        if desks is not None:
+            take_desk(desks, 0)      # this process's renders are open to help too
+        pool = ProcessPoolExecutor(processes - 1, mp_context=ctx, initializer=_start_replay_worker,
+                                   initargs=(os.getpid(), desks))
+        feeders = [threading.Thread(target=feed, args=(pool,), name=f"replay-feeder-{k}", daemon=True)
+                   for k in range(processes - 1)]
+        one_core()       # this process is one of the workers too (its rendering stays on one core from here on)
+        for feeder in feeders:
+            feeder.start()
         while given < len(items):
             item = take()
             if item is not None:
@@ -140,11 +143,12 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
             waiting.clear()
         if desks is not None:
             desks.finished.value = 1     # helping processes stop
-        pool.shutdown(wait=given == len(items), cancel_futures=True)
+        if pool is not None:
+            pool.shutdown(wait=given == len(items), cancel_futures=True)
         if desks is not None:
             leave_desk()
         if shared is not None:
-            shared["frames_helped"] = (desks.frames_helped if desks else 0) + sum(helped)
+            shared["frames_helped"] = (desks.frames_helped if desks else 0) + sum(helped.values())
 
 
 def _start_replay_worker(parent_pid: int, desks: Desks | None) -> None:

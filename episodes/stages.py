@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import logging
 import time
+from contextlib import closing, nullcontext
 from pathlib import Path
 
 import h5py
@@ -115,10 +116,10 @@ def start_render_helpers(count: int, for_path: Path):
     """This process's `count` render helpers (episodes/render_pool.py), started if need be and not
     waited for: a render uses them once they are up. None if they cannot start: then the render runs
     in this process alone, slower but the same bytes."""
-    from episodes.render_pool import shared_helpers
+    from episodes.render_pool import MAX_HELPERS, shared_helpers
 
     try:
-        return shared_helpers(count, wait=False)
+        return shared_helpers(min(count, MAX_HELPERS), wait=False)
     except (OSError, RuntimeError) as exc:
         log.warning("%s: render helpers did not start (%s); rendering in this process alone", for_path, exc)
         return None
@@ -141,11 +142,12 @@ def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, 
             setup_cpu = time.process_time() - cpu0   # this process's CPU seconds of the set-up (benchmarks)
             first = time.time()     # wall clock shared by processes: when this part's frames start (benchmarks)
             ordered = job.in_order(frames) if job is not None else map(frames.capture, range(len(steps)))
-            for frame, error in ordered:
-                errors += error
-                t2 = clock()
-                writer.append(frame)
-                seconds["write"] += clock() - t2
+            with closing(ordered) if job is not None else nullcontext():     # its helpers read to their end
+                for frame, error in ordered:
+                    errors += error
+                    t2 = clock()
+                    writer.append(frame)
+                    seconds["write"] += clock() - t2
             last = time.time()
             t0 = clock()
         seconds["write"] += clock() - t0    # closing flushes the last chunks
