@@ -6,6 +6,7 @@ import json
 import logging
 import os
 import sys
+from contextlib import closing
 from pathlib import Path
 
 import click
@@ -172,7 +173,9 @@ def replay(raw, profile, out_dir, max_frames, workers, drift_bound_m) -> None:
     failed, written = [], []
     done = replay_recordings(list(raw), prof, out_dir, workers=workers, max_frames=max_frames,
                              drift_bound_m=drift_bound_m)
-    with click.progressbar(done, length=len(raw), label=f"replaying under '{profile}'", file=sys.stderr) as results:
+    # closed however this ends (an error raised with its traceback too): its worker processes stop then
+    with closing(done), click.progressbar(done, length=len(raw), label=f"replaying under '{profile}'",
+                                          file=sys.stderr) as results:
         for path, outcome in results:
             if isinstance(outcome, Exception):    # one bad input never stops the others
                 if cli_errors.show_traceback():

@@ -14,6 +14,7 @@ import os
 import statistics
 import threading
 import time
+from contextlib import closing
 from pathlib import Path
 
 from episodes.atomic import file_sha256
@@ -143,7 +144,9 @@ def batch_figures(raw_path: Path, profile, workers: int, out_dir: Path, files: i
         t0, cpu0, child0 = time.perf_counter(), time.process_time(), children_cpu()
         if way.startswith("whole_recordings"):
             helping = way == "whole_recordings"
-            done = list(replay_recordings(raws, profile, out, workers=workers, shared=shared, help_others=helping))
+            with closing(replay_recordings(raws, profile, out, workers=workers, shared=shared,
+                                           help_others=helping)) as batch:
+                done = list(batch)
             if helping:
                 helped.append(shared["frames_helped"])
         else:   # each recording in turn: alone, or (the way before) its render shared with helpers
