@@ -104,6 +104,16 @@ def tip_pinch(hand_name: str, fingers: tuple[str, ...] | None = None) -> TipPinc
     return TipPinch(close=q, gap_m=q_gap, fingers=fingers, moving=moving)
 
 
+def refolded(hand_name: str, close: np.ndarray, fold: float, fingers: tuple[str, ...] | None = None) -> np.ndarray:
+    """``close`` with the fingers that do not pinch folded ``fold`` of the way to their closed end (a plan
+    step's `pinch_fold`) rather than tip_pinch's FOLD_FRACTION: folded that far, the DexHand021's pressed a
+    jigsaw piece's top beside the tips and turned it over in the hand."""
+    pinch = tip_pinch(hand_name, fingers)
+    thumb, tips = pinch_rows(hand_name, pinch.fingers)
+    _, folded = moving_and_folded(hand_kinematics(hand_name), [thumb, *tips], fold)
+    return np.where(pinch.moving, close, folded)
+
+
 def tip_preshape(hand_name: str, open_: np.ndarray, close: np.ndarray, width_m: float,
                  fingers: tuple[str, ...] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """As ``pinch_preshape`` for the tips: the actuator targets on the way from ``open_`` to

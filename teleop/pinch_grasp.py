@@ -75,16 +75,16 @@ def pinch_grasp(hand_name: str, fingers: tuple[str, ...] | None = None) -> Pinch
     return grasp
 
 
-def moving_and_folded(kin, rows: list[int]) -> tuple[np.ndarray, np.ndarray]:
+def moving_and_folded(kin, rows: list[int], fold: float = FOLD_FRACTION) -> tuple[np.ndarray, np.ndarray]:
     """(actuators that move any of the given keypoint rows, the pose the others fold away to): the
-    actuators that move a pinching point solve, the rest fold away."""
+    actuators that move a pinching point solve, the rest fold ``fold`` of the way to their closed end."""
     moving = np.zeros(kin.dof, bool)
     for q in (kin.home, kin.mid):     # a coupling resting on its limit hides a joint at one of them
         _, J = kin.points_and_jacobians(q)
         for row in rows:
             moving |= np.abs(J[row]).sum(axis=0) > 1e-9
     far = np.where(np.abs(kin.upper - kin.home) >= np.abs(kin.lower - kin.home), kin.upper, kin.lower)
-    return moving, kin.home + FOLD_FRACTION * (far - kin.home)
+    return moving, kin.home + fold * (far - kin.home)
 
 
 def damped_step(kin, q: np.ndarray, cols, A: np.ndarray, r: np.ndarray, damping: float, gap, q_gap: float):

@@ -21,7 +21,8 @@ from sim.demo_plan import GRASP_YAW_ACROSS, SIDE_GRASP, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from sim.physics import CONTROL_HZ
 from sim.scene.reach import PALM_DOWN
-from teleop.flat_pinch import flat_pinch_rotation, tip_axis, tip_pinch, tip_preshape, tips_over_lowest, width_along
+from teleop.flat_pinch import (flat_pinch_rotation, refolded, tip_axis, tip_pinch, tip_preshape, tips_over_lowest,
+                                width_along)
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yaw_of, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_fingers, pinch_grasp, pinch_preshape, thumb_actuators
@@ -103,6 +104,8 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     lo, hi = op.scene.model.actuator_ctrlrange[side["hand_ids"]].T
     fingers = pinch_fingers(item)       # `pinch_fingers`: the pad pinch set the tips come from (default the hand's)
     close = np.clip(tip_pinch(hand, fingers).close, lo, hi)
+    if item.get("pinch_fold") is not None:     # the other fingers folded that far instead (flat_pinch.refolded)
+        close = np.clip(refolded(hand, close, float(item["pinch_fold"]), fingers), lo, hi)
     body_rot = data.xmat[body].reshape(3, 3)
     at = body_rot @ grasp_point(item)       # the tips close there: the centre, or a grasp_point (a handle)
     mirror = mirror_vec if left else (lambda v: v)
@@ -309,7 +312,7 @@ def grasp_and_lift(op: PlanningOperator, data: mujoco.MjData, item: dict, name: 
         else:
             tl.add(duration, hand=targets, pos=np.array([*grasp[:2], wrist_z]))
     tl.add(DURATIONS["hold"])
-    tl.add(DURATIONS["lift"], pos=grasp + LIFT_HEIGHT_M * UP)
+    tl.add(DURATIONS["lift"], pos=grasp + lift_height(item) * UP)
     op.look_again(side, name, data, reach, len(tl.frames), planned=here)
     return offset
 
@@ -376,6 +379,12 @@ def carry_height(op: PlanningOperator, data: mujoco.MjData, item: dict, name: st
     return float(top + CARRY_CLEARANCE_M + task.objects[name].half_extents[2] - offset[2])
 
 
+def lift_height(item: dict) -> float:
+    """How far a pick lifts its object over the grasp and carries it over the place: `lift_m`, else
+    LIFT_HEIGHT_M (jigsaw's yellow piece, 9 cm: carried 14 cm up, the RH56DFX set it out on 2 of 3 seeds)."""
+    return LIFT_HEIGHT_M if item.get("lift_m") is None else float(item["lift_m"])
+
+
 def carry_steps(item: dict) -> int:
     """Control steps of a pick's carry, from the lift to above its place: `carry_s` seconds, else
     DURATIONS["carry"]. A long reach, the hand turning as it goes, takes a person longer; at the
@@ -409,7 +418,7 @@ def carry_and_place(op: PlanningOperator, data: mujoco.MjData, item: dict, name:
     place = place_centre(op, data, item, name) - offset
     op.leaves(name, rest_centre(place + offset), on=item["place"])
     carry_frame = len(tl.frames)
-    op.set_off(side, data, item, carry_steps(item), pos=place + LIFT_HEIGHT_M * UP, carried=(name, offset))
+    op.set_off(side, data, item, carry_steps(item), pos=place + lift_height(item) * UP, carried=(name, offset))
     lower_frame = len(tl.frames)
     out = None
     if side_roll(item):     # the way the hand came in, back out: along its palm's normal

@@ -8,10 +8,10 @@ from typing import ClassVar
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from ..base import Bool, Int, Name, Number, is_number
-from .fields import (CARRY_RANGE_S, GRASP_YAW_ACROSS, OPEN_RANGE_S, ObjectAxis, ObjectPoint, PICK_GRASPS,
-                     PLACE_FROM_FRONT, PRESS_RANGE_M, PlaceFrom, PlaceOffset, RollDeg, SlideClearance, TABLE_TARGET,
-                     TaskObject, VIA_TIMES_RANGE, an_object, front_container, only_with_grasp, side_grasp_roll,
-                     slid_in)
+from .fields import (CARRY_RANGE_S, GRASP_YAW_ACROSS, LIFT_RANGE_M, OPEN_RANGE_S, ObjectAxis, ObjectPoint,
+                     PICK_GRASPS, PLACE_FROM_FRONT, PRESS_RANGE_M, PlaceFrom, PlaceOffset, RollDeg, SlideClearance,
+                     TABLE_TARGET, TaskObject, VIA_TIMES_RANGE, an_object, front_container, only_with_grasp,
+                     side_grasp_roll, slid_in)
 from .step import GraspFields, PlanStep, ViaStop
 
 
@@ -29,7 +29,8 @@ class PickStep(PlanStep, GraspFields):
     not only the pads, clear the part (a thin rim: teleop/pinch_tips.py); grasp: flat_pinch picks a thin object lying flat with the fingertips, either side of
     its centre or of grasp_point (a spatula's handle clear of its blade), grasp_squeeze_m (metres) aiming its
     closed tips that far past each other for a firmer hold (a heavy tool), grasp_tips_height_m (metres) bringing
-    the hand down so its closed tips end that high over the object's bottom (half a handle's height); grasp: side is the palm grasp
+    the hand down so its closed tips end that high over the object's bottom (half a handle's height), pinch_fold (a
+    fraction) folding its other fingers that far towards their closed end instead of 0.9; grasp: side is the palm grasp
     from the side, thumb up, around an upright part (a drill's grip under its motor, a bottle), turned
     grasp_roll_deg about the fingers (default 90: thumb up). place_axis [x, y, z] (object frame) is turned
     on the way to point straight down and lowered that end first (a marker stood up in a pen cup; place_offset's
@@ -45,6 +46,7 @@ class PickStep(PlanStep, GraspFields):
     square to its target, the one with the tips closing (thumb to fingers) along it, and ease_turned: true turns the
     slide off the thumb's side with the hand as it is turned square (teleop/plan_steps/flat_place.py);
     grasp_yaw_object: true counts a flat pinch's grasp_yaw from the object's own x axis as it lies, not the world's.
+    lift_m (metres) is how far the hand lifts the object over its grasp and carries it over the place (default 14 cm);
     carry_s (seconds) is how long the carry from the lift to above the place takes (default 1 s); open_s (seconds)
     how long the hand opens over the place before it rises (default 1/3 s: fingers wedged on the object open
     late, and the rising hand lifts it out). close_thumb_last:
@@ -76,6 +78,10 @@ class PickStep(PlanStep, GraspFields):
     release_relax: Number = Field(None, gt=0.0, le=1.0, description="a fraction in (0, 1]")
     # palm grasp: the thumb closes after the fingers, whatever the hand file's `late` (plan_steps/pick_place.py)
     close_thumb_last: Bool = False
+    # lifted this far over the grasp and carried this far over the place (default LIFT_HEIGHT_M, 14 cm): a lower
+    # carry, less swing for a piece held by its edges (teleop/plan_steps/pick_place.py)
+    lift_m: Number = Field(None, ge=LIFT_RANGE_M[0], le=LIFT_RANGE_M[1],
+                           description=f"metres in [{LIFT_RANGE_M[0]:g}, {LIFT_RANGE_M[1]:g}]")
     # seconds the carry from the lift to above the place takes (default 1 s): a long reach, turning as it goes
     carry_s: Number = Field(None, gt=0.0, le=CARRY_RANGE_S[1], description=f"seconds in (0, {CARRY_RANGE_S[1]:g}]")
     # seconds the hand opens over the place before it rises (default DURATIONS["open"], 1/3 s)

@@ -8,9 +8,9 @@ from typing import Annotated, ClassVar, Literal
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from ..base import Bool, CatalogModel, Int, Name, Number, is_number
-from .fields import (APPROACH_PITCH_RANGE_DEG, GRASP_YAW_ACROSS, HANDS, ObjectPoint, PINCH_FINGERS, PLAN_GRASPS,
-                     PlaceOffset, SQUEEZE_RANGE_M, TIPS_HEIGHT_RANGE_M, VIA_KINDS, WAIT_RANGE_S, an_object,
-                     container_names, one_of, only_with_grasp, plan_scope)
+from .fields import (APPROACH_PITCH_RANGE_DEG, FOLD_RANGE, GRASP_YAW_ACROSS, HANDS, ObjectPoint, PINCH_FINGERS,
+                     PLAN_GRASPS, PlaceOffset, SQUEEZE_RANGE_M, TIPS_HEIGHT_RANGE_M, VIA_KINDS, WAIT_RANGE_S,
+                     an_object, container_names, one_of, only_with_grasp, plan_scope)
 
 
 class ViaStop(CatalogModel):
@@ -95,6 +95,10 @@ class GraspFields(CatalogModel):
     # a pad pinch's pre-shape spread until its fingertips, not only its pads, clear the part (curled fingertips
     # that reach past the pads land on a thin rim otherwise; teleop/pinch_tips.py)
     pinch_clear_tips: Bool = False
+    # a flat pinch's other fingers (not pinching) folded this fraction of the way to their closed end (default 0.9,
+    # teleop/pinch_grasp.py): folded that far, the DexHand021's pressed a jigsaw piece's top and turned it over
+    pinch_fold: Number = Field(None, ge=FOLD_RANGE[0], le=FOLD_RANGE[1],
+                               description=f"a fraction in [{FOLD_RANGE[0]:g}, {FOLD_RANGE[1]:g}]")
 
     @field_validator("grasp", mode="before")
     @classmethod
@@ -125,6 +129,8 @@ class GraspFields(CatalogModel):
         only_with_grasp("flat_pinch", "it presses the pinch's tips past each other"))
     _flat_pinch_tips_height = field_validator("grasp_tips_height_m", mode="before")(
         only_with_grasp("flat_pinch", "where a flat pinch's closed tips end on the part"))
+    _flat_pinch_fold = field_validator("pinch_fold", mode="before")(
+        only_with_grasp("flat_pinch", "how far a flat pinch's other fingers fold"))
     _pad_pinch_clear_tips = field_validator("pinch_clear_tips", mode="before")(
         only_with_grasp("pinch", "a pad pinch's pre-shape spread until its fingertips clear the part"))
 
