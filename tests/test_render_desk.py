@@ -6,16 +6,14 @@ is the one-worker file whoever renders which frame, and a render nobody helps is
 import multiprocessing
 import os
 import signal
-import time
 
 import pytest
 
 from episodes import render_desk, stages
 from episodes.atomic import file_sha256
-from episodes.render_pool import NEXT
-from episodes.replay_frames import ReplayFrames
 from episodes.stages import render_to_file
 from sim.registry import parse_sensor_profile
+from held_frames import held_until_helpers_take
 from tiny_profile import TINY as TINY_FIELDS
 
 TINY = parse_sensor_profile(TINY_FIELDS)
@@ -29,15 +27,7 @@ def _help_once_idle(desks, go, helped) -> None:
     helped.put(desks.frames_helped)
 
 
-class _WaitingForTheHelper(ReplayFrames):
-    """The writer's own renderer, held at its first frame until the helper has taken frames: tiny frames
-    render faster than the helper builds its scene, and the test must see its frames written."""
-
-    def capture(self, i):
-        deadline = time.monotonic() + 60
-        while render_desk.standby_helpers()._state[NEXT] < 3 and time.monotonic() < deadline:
-            time.sleep(0.01)
-        return super().capture(i)
+_WaitingForTheHelper = held_until_helpers_take(render_desk.standby_helpers)
 
 
 @pytest.mark.timeout(180)     # a writer that waits for a helper forever fails here, not in CI's limit
@@ -69,19 +59,17 @@ def test_the_batch_process_helps_a_posted_render_and_the_file_is_the_one_worker_
         file_sha256(tmp_path / "one.render.h5")}
 
 
-class _KillingTheHelper(ReplayFrames):
+class _KillingTheHelper(_WaitingForTheHelper):
     """The writer's own renderer, which kills the helping process once it has taken frames."""
 
     helper_pid = 0
 
     def capture(self, i):
-        deadline = time.monotonic() + 60
-        while render_desk.standby_helpers()._state[NEXT] < 3 and time.monotonic() < deadline:
-            time.sleep(0.01)
+        frame = super().capture(i)
         if self.helper_pid:
             os.kill(self.helper_pid, signal.SIGKILL)     # some of its frames may be sent, some lost
             _KillingTheHelper.helper_pid = 0
-        return super().capture(i)
+        return frame
 
 
 @pytest.mark.timeout(180)     # the writer must see the killed helper's end, not wait for its frames

@@ -11,9 +11,9 @@ import pytest
 from episodes import render_pool, stages
 from episodes.atomic import file_sha256
 from episodes.render_pool import shared_helpers
-from episodes.replay_frames import ReplayFrames
 from episodes.stages import frame_steps, render_to_file, replay_to_file
 from sim.registry import parse_sensor_profile
+from held_frames import held_until_helpers_take
 from tiny_profile import TINY as TINY_FIELDS
 
 TINY = parse_sensor_profile(TINY_FIELDS)
@@ -37,15 +37,7 @@ def test_a_render_does_not_wait_for_helpers_to_start(replay_path, one_worker_sha
     assert pool.wait_ready() and pool.ready(0)     # it went on starting, for the next render
 
 
-class _WaitingForHelpers(ReplayFrames):
-    """The writer's own renderer, held at its first frame until a helper has taken frames: tiny frames
-    render faster than a helper builds its scene, and the test must see helper-made frames written."""
-
-    def capture(self, i):
-        deadline = time.monotonic() + 60
-        while render_pool.shared_helpers(1)._state[render_pool.NEXT] < 3 and time.monotonic() < deadline:
-            time.sleep(0.01)
-        return super().capture(i)
+_WaitingForHelpers = held_until_helpers_take(lambda: render_pool.shared_helpers(1))
 
 
 def test_frames_from_helpers_give_the_one_worker_file_byte_for_byte(replay_path, one_worker_sha, tmp_path, monkeypatch):
