@@ -102,3 +102,20 @@ class SideTimeline:
                         prev.hand + s * (frame.hand - prev.hand))
             prev = frame
         return prev.pos, prev.quat, prev.hand
+
+
+def roll_then_swing(R0: np.ndarray, R1: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """From wrist-site rotation ``R0`` to ``R1`` as a roll about ``R0``'s fingers (site z) and then the least
+    swing of the fingers onto ``R1``'s: the rotations half way through the roll and at its end. A roll of
+    half a turn has no shorter way round: it goes the way that has the palm (site y) facing up half way (rolled
+    palm down, the RM65 lost its IK branch in faucet_cup_water_fill's lever pull, seed 0)."""
+    z0, z1 = R0[:, 2], R1[:, 2]
+    axis = np.cross(z0, z1)
+    if np.linalg.norm(axis) < 1e-9:                 # fingers already along z1, or reversed: swing about the thumb side
+        axis = R0[:, 0]
+    swing = axis_rotation(axis / np.linalg.norm(axis), np.arccos(np.clip(z0 @ z1, -1.0, 1.0)))
+    rolled = swing.T @ R1                           # R0 rolled about z0
+    roll = float(np.arctan2(np.cross(R0[:, 0], rolled[:, 0]) @ z0, R0[:, 0] @ rolled[:, 0]))
+    ways = (roll, roll - 2 * np.pi * np.sign(roll)) if abs(roll) > np.radians(170.0) else (roll,)
+    roll = max(ways, key=lambda a: float((axis_rotation(z0, a / 2) @ R0)[2, 1]))
+    return axis_rotation(z0, roll / 2) @ R0, rolled

@@ -20,9 +20,11 @@ import numpy as np
 from sim.demo_plan import BOTH_HANDS, step_kind
 from sim.physics import CONTROL_HZ
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
+from sim.embodiment.frames import quat_to_mat
 from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
-from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation
+from teleop.operator_motion import (DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation, roll_then_swing,
+                                    quat as motion_quat)
 from teleop.plan_steps import PLANNERS
 from teleop.transit import hand_outline, bounding_box_points, obstacles, transit_height
 
@@ -126,12 +128,13 @@ class ScriptedOperator:
         return done[-1] if done else (self.object_pos(data, name), None)
 
     def set_off(self, side: dict, data: mujoco.MjData, item: dict, duration: int, pos, quat=None, hand=None,
-                carried: tuple[str, np.ndarray] | None = None) -> None:
+                carried: tuple[str, np.ndarray] | None = None, roll_first: bool = False) -> None:
         """Move the hand from its last keyframe to ``pos`` (``quat``, ``hand``) in ``duration`` steps,
         as ``SideTimeline.add``; when the straight move would pass too low over an object (where the
         plan has it when the move starts), first rise to a transit height, move across there, then
         come down (teleop/transit.py). ``carried``: the object held (its centre's offset from the
-        wrist, world), which must clear the others too."""
+        wrist, world), which must clear the others too. ``roll_first``: the hand first rolls about its
+        fingers (once risen, if it rises), then swings them round on its way (operator_motion.roll_then_swing)."""
         tl: SideTimeline = side["timeline"]
         last = tl.frames[-1]
         quat = last.quat if quat is None else np.asarray(quat, float)
@@ -156,14 +159,23 @@ class ScriptedOperator:
         outline = hand_outline(side["hand"], side["name"], last.hand, hand)
         height = transit_height(last.pos, last.quat, np.asarray(pos, float), quat, outline, points, in_way)
         if height is None:
+            self._roll(tl, quat, roll_first)
             tl.add(duration, pos=pos, quat=quat, hand=hand)
             return
         height = max(height, last.pos[2], float(pos[2]))
         if height > last.pos[2]:
             tl.add(DURATIONS["lift"], pos=np.array([*last.pos[:2], height]))
+        self._roll(tl, quat, roll_first)
         tl.add(duration, pos=np.array([pos[0], pos[1], height]), quat=quat, hand=hand)
         if height > pos[2]:
             tl.add(DURATIONS["descend"], pos=pos)
+
+    @staticmethod
+    def _roll(tl: SideTimeline, quat: np.ndarray, roll_first: bool) -> None:
+        """set_off's ``roll_first``: the roll about the fingers where the hand is, in two halves (the way round)."""
+        if roll_first:
+            for R in roll_then_swing(quat_to_mat(tl.frames[-1].quat), quat_to_mat(quat)):
+                tl.add(DURATIONS["approach"] // 2, quat=motion_quat(R))
 
     def set_off_home(self, side: dict, data: mujoco.MjData, hand=None) -> None:
         """Take the hand back to where it rests (``hand``: its joints on the way, else as they are), over

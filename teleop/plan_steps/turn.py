@@ -30,6 +30,10 @@ With `withdraw_past_end` (opt-in) the hand, once it lets go, moves level out alo
 and goes on from there, rather than rising over the link (the arm behind it would lie across a tall door's top);
 with home on the link's other side it first turns round that end, past it, until it is wholly on home's side
 (straight home from past the end, the fingers crossed a door pulled open past square and shoved it back).
+With `roll_first` (opt-in) the hand, before it sets off, rolls about its fingers where it is to the turn's roll and
+then swings them round on its way: turned over from a palm push (thumb up) to a lever pushed thumb down, half a turn
+about a level axis in one move, the UR5's wrist_1 folded the wrist onto its forearm (the IK's branch from there);
+rolled first, the last wrist joint takes the half turn.
 """
 
 from __future__ import annotations
@@ -160,10 +164,11 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         above = approach.copy()
         above[2] = max(approach[2], link.top(start) + CLEARANCE_M - lowest)
         op.set_off(side, data, {"hand": item["hand"]}, DURATIONS["approach"], pos=above, quat=quat(first[1]),
-                   hand=side["open"])
+                   hand=side["open"], roll_first=item.get("roll_first", False))
         tl.add(DURATIONS["descend"], pos=approach)
     else:
-        op.set_off(side, data, item, DURATIONS["approach"], pos=approach, quat=quat(first[1]), hand=side["open"])
+        op.set_off(side, data, item, DURATIONS["approach"], pos=approach, quat=quat(first[1]), hand=side["open"],
+                   roll_first=item.get("roll_first", False))
     approached = len(tl.frames) - 1     # the hand off the face, where it comes down from
     tl.add(DURATIONS["descend"], pos=first[0])
     previous, previous_angle, previous_R = (faces[radii[0]], first[0]), start, first[1]

@@ -11,7 +11,7 @@ from .step import PlanStep
 
 class TurnStep(PlanStep):
     """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [palm_look], [start_look], [speed], [return_home],
-    [approach_over], [withdraw_past_end], [after], [wait_s]}: swing a
+    [approach_over], [withdraw_past_end], [roll_first], [after], [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
     on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
     palm_look: true (with palm_from) re-aims the palm at the link's angle as the fingertips let go of it;
@@ -21,7 +21,8 @@ class TurnStep(PlanStep):
     the hand risen off the link where it let go, so the next step sets off from there; approach_over: true
     brings the hand to the link from above its top; withdraw_past_end: true takes the hand, once it lets go,
     out along the link past its free end before it goes on (round that end, not over the link: with home on the
-    link's other side, round the end to that side first)."""
+    link's other side, round the end to that side first); roll_first: true has the hand, before it sets off, roll
+    about its fingers where it is to the turn's roll, then swing them round on its way."""
 
     turn: Name
     to: Number
@@ -43,6 +44,9 @@ class TurnStep(PlanStep):
     # that end rather than rising over the link (the arm behind a hand outside a tall door lies across its top);
     # home on the link's other side, it turns round the end to that side before it goes home
     withdraw_past_end: Bool = False
+    # true: the hand first rolls about its fingers where it is, then swings them round on its way to the link (from a
+    # palm push, thumb up, to a lever pushed thumb down: turned over in one move the UR5's wrist folded onto its forearm)
+    roll_first: Bool = False
 
     @field_validator("turn", mode="before")
     @classmethod
