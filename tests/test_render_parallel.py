@@ -7,6 +7,7 @@ import h5py
 import numpy as np
 import pytest
 
+from episodes import stages
 from episodes.h5_concat import concat_frames
 from episodes.raw import write_raw
 from episodes.render_pool import shared_helpers
@@ -18,6 +19,8 @@ from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample
 from sim.tasks import load_task
 from teleop.recorder import record_episode
+
+from held_frames import held_until_helpers_take
 from tiny_profile import TINY
 
 
@@ -35,10 +38,12 @@ def _arrays(path) -> dict[str, bytes]:
     return out
 
 
-def test_two_workers_render_the_same_arrays_as_one(replay_path, tmp_path):
+def test_two_workers_render_the_same_arrays_as_one(replay_path, tmp_path, monkeypatch):
     profile = parse_sensor_profile(TINY)
     one = render_to_file(replay_path, profile, tmp_path / "one.render.h5", workers=1)
     shared_helpers(1)       # up before the render: one that is still starting is not waited for, takes no frame
+    # the writer waits for the helper's first frames (tiny frames render faster than its scene is built)
+    monkeypatch.setattr(stages, "ReplayFrames", held_until_helpers_take(lambda: shared_helpers(1)))
     two = render_to_file(replay_path, profile, tmp_path / "two.render.h5", workers=2)
     assert (one["workers"], two["workers"]) == (1, 2)
     assert one["frames"] == two["frames"] == 18
