@@ -65,10 +65,12 @@ class Desk:
         self.readers, self.writers = [r for r, _ in pipes], [w for _, w in pipes]
         self.owner = ctx.RawValue("q", 0)              # the process whose renders these are
         self.helper_pids = ctx.RawArray("q", slots)    # each slot's process, once it has helped
-        # a helping process's own view: its sender (one for the batch: a pipe takes one writer), and the
-        # last job it helped (never joined twice: the writer stops reading a helper that has ended)
+        # a helping process's own view: its sender (one for the batch: a pipe takes one writer), the last
+        # job it helped (never joined twice: the writer stops reading a helper that has ended), and the last
+        # task it read (read again only for a new job: idle processes look every HELP_POLL_S)
         self._sender: FrameSender | None = None
         self._helped = 0
+        self._task: tuple | None = None
 
     def render_to_help(self) -> tuple[int, tuple | None]:
         """(frames not yet taken, the task) of the render under way that this process may still help."""
@@ -76,10 +78,11 @@ class Desk:
             job, left = self.state[JOB], int(self.state[TOTAL] - self.state[NEXT])
         if not job or job == self._helped or (self._sender is not None and self._sender.broken):
             return 0, None
-        task = self.posted.get()        # posted just after the counters were set: maybe not yet
-        if task is None or task[0] != job or not _alive(self.owner.value):
+        if self._task is None or self._task[0] != job:
+            self._task = self.posted.get()      # posted just after the counters were set: maybe not yet
+        if self._task is None or self._task[0] != job or not _alive(self.owner.value):
             return 0, None
-        return left, task
+        return left, self._task
 
     def help(self, slot: int, task: tuple) -> int:
         """Render frames of `task` as helper `slot` until none is left (or its writer stalls for STALL_S);
@@ -170,13 +173,15 @@ class StandbyHelpers(HelperChannels):
 
     def __init__(self, desk: Desk):
         desk.owner.value = os.getpid()
-        slots = len(desk.readers)
-        super().__init__(slots, MAX_AHEAD, desk.lock, desk.state, [desk.posted] * slots, desk.readers)
+        super().__init__(len(desk.readers), MAX_AHEAD, desk.lock, desk.state, desk.readers)
         self.desk = desk
 
     def _helper_alive(self, k: int) -> bool:
         pid = self.desk.helper_pids[k]
         return pid == 0 or _alive(pid)      # one that never helped has no frame of ours
+
+    def _hand_out(self, task: tuple, helpers: set[int]) -> None:
+        self.desk.posted.put(task)          # one post for every slot: whichever process is idle takes it up
 
 
 # this process's place in a batch (the desks cross to a spawned process only as it starts: shared locks

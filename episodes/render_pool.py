@@ -80,13 +80,14 @@ def _helper_main(index: int, tasks, conn, lock, state, parent_pid: int, max_ahea
     out.close()
 
 
-def help_render(task: tuple, index: int, out: "FrameSender", lock, state, max_ahead: int,
+def help_render(task: tuple, index: int, out: FrameSender, lock, state, max_ahead: int,
                 still_wanted=lambda: True) -> int:
     """Render frames of the job `task` (job id, replay path, profile, steps) as helper `index`, taking
     them from the shared counter and sending them through `out`, until none is left; then its timings.
     A job that ended before its scene was built is skipped without a word (the writer waits only for
     helpers that took a frame). `still_wanted()` is asked while the writer holds this helper back: False
-    gives up (the writer's process is gone). Returns the number of frames rendered."""
+    gives up (the writer's process is gone, or it has written nothing for a long while); the frames
+    sent so far and the helper's end still reach the writer. Returns the number of frames rendered."""
     from episodes.replay_frames import ReplayFrames
 
     job, replay_path, profile, steps = task
@@ -147,20 +148,24 @@ def _warm_gl() -> None:
 
 
 class HelperChannels:
-    """The writer's side of `count` helpers: the shared counters, a task queue and a frame pipe per
-    helper, and the jobs handed to them. Who the helpers are is the subclass's: processes this one
-    spawned (RenderHelpers), or a batch's process with nothing left to do (episodes/render_desk.py)."""
+    """The writer's side of `count` helpers: the shared counters, a frame pipe per helper, and the jobs
+    handed to them. Who the helpers are, and how a job reaches them, is the subclass's: processes this
+    one spawned (RenderHelpers), or a batch's processes with nothing left to do (episodes/render_desk.py)."""
 
-    def __init__(self, count: int, max_ahead: int, lock, state, tasks: list, readers: list):
+    def __init__(self, count: int, max_ahead: int, lock, state, readers: list):
         if count > MAX_HELPERS:
             raise ValueError(f"render helpers: expected at most {MAX_HELPERS}, got {count}")
         self.count, self.max_ahead = count, max_ahead
-        self._lock, self._state, self._tasks, self._readers = lock, state, tasks, readers
+        self._lock, self._state, self._readers = lock, state, readers
         self._lost: set[int] = set()     # helpers whose pipe ended or broke
         self._jobs = 0
         self._busy = threading.Lock()
 
     def _helper_alive(self, k: int) -> bool:
+        raise NotImplementedError
+
+    def _hand_out(self, task: tuple, helpers: set[int]) -> None:
+        """Give `task` (job id, replay path, profile, steps) to `helpers`."""
         raise NotImplementedError
 
     @contextmanager
@@ -176,10 +181,9 @@ class HelperChannels:
             job = _Job(self, self._jobs, len(steps))
             with self._lock:
                 self._state[:] = [job.id, 0, len(steps), 0, 0]
-            for k in range(min(helpers, self.count)):
-                if k not in self._lost and self._helper_alive(k):
-                    self._tasks[k].put((job.id, str(replay_path), profile, np.asarray(steps)))
-                    job.open.add(k)
+            job.open = {k for k in range(min(helpers, self.count)) if k not in self._lost and self._helper_alive(k)}
+            if job.open:
+                self._hand_out((job.id, str(replay_path), profile, np.asarray(steps)), job.open)
             try:
                 yield job
             finally:
@@ -239,8 +243,8 @@ class RenderHelpers(HelperChannels):
             raise ValueError(f"render helpers: expected at least 1, got {count}")
         ctx = multiprocessing.get_context("spawn")   # a forked child would inherit GL and h5py state
         self.owner = os.getpid()
-        super().__init__(count, max_ahead, ctx.Lock(), ctx.RawArray("q", STATE_SLOTS),
-                         [ctx.SimpleQueue() for _ in range(count)], [])
+        super().__init__(count, max_ahead, ctx.Lock(), ctx.RawArray("q", STATE_SLOTS), [])
+        self._tasks = [ctx.SimpleQueue() for _ in range(count)]
         self._procs = []
         for k in range(count):
             reader, writer = ctx.Pipe(duplex=False)
@@ -254,6 +258,10 @@ class RenderHelpers(HelperChannels):
 
     def _helper_alive(self, k: int) -> bool:
         return self._procs[k].is_alive()
+
+    def _hand_out(self, task: tuple, helpers: set[int]) -> None:
+        for k in helpers:
+            self._tasks[k].put(task)
 
     def alive(self) -> bool:
         return not self._lost and all(p.is_alive() for p in self._procs)

@@ -4,8 +4,8 @@ One recording on N workers shares its frames' render between processes (episodes
 physics replay and the episode's assembly stay in one process, and sharing a frame costs a pipe copy.
 Several recordings on N workers go faster whole: this process and N-1 spawned ones each take the next
 recording and replay, render and assemble it, so every stage runs on every core and nothing passes
-between them until the end: once this process has none left to take, it helps render the spawned ones'
-last recordings (episodes/render_desk.py). Either way each episode is byte-identical to a one-worker
+between them until the end: a process with none left to take helps render the others' last recordings
+(episodes/render_desk.py). Either way each episode is byte-identical to a one-worker
 replay of it.
 """
 
