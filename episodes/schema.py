@@ -165,7 +165,7 @@ CAMERA_MODEL = "pinhole"
 CONTROL_MODE = "absolute_joint_position"
 ACTION_TYPE = "joint_position_target"
 
-# Per-dataset storage: images compress with LZF (fast); everything else with gzip.
+# Per-dataset storage (episodes/writer.py): one frame per chunk for images; Zstd or Blosc LZ4 throughout.
 IMAGE_CHUNK_FRAMES = 1
 
 

@@ -1,11 +1,11 @@
-"""The episode writer: small per-frame values are buffered and written at the end exactly as if they
-had been appended frame by frame; large ones stream; a failed episode leaves no file."""
+"""The episode writer: small per-frame values are buffered and written in blocks of frames exactly as if
+they had been appended frame by frame; large ones stream; a failed episode leaves no file."""
 
 import h5py
 import numpy as np
 import pytest
 
-from episodes.writer import SMALL_FRAME_BYTES, EpisodeWriter
+from episodes.writer import SMALL_BLOCK_FRAMES, SMALL_FRAME_BYTES, EpisodeWriter
 
 
 def test_buffered_and_streamed_values_come_back_frame_by_frame(tmp_path):
@@ -25,6 +25,37 @@ def test_buffered_and_streamed_values_come_back_frame_by_frame(tmp_path):
         assert f["image"][:, 5, 5].tolist() == [0, 1, 2, 3, 4]
         assert [e.decode() for e in f["error"][()]] == ["", "", "", "bad", ""]
         assert f["late"][()].tolist() == [0, 0, 12, 13, 14]
+
+
+def test_small_values_written_block_by_block_read_back_as_if_appended_frame_by_frame(tmp_path):
+    """Over several blocks: a key that comes late, one that skips whole blocks and frames, values cast
+    to the first frame's dtype as numpy casts them, and a final value over a key already written."""
+    n = 3 * SMALL_BLOCK_FRAMES + 5
+    gappy = [i for i in range(n) if i % 7 and not SMALL_BLOCK_FRAMES <= i < 2 * SMALL_BLOCK_FRAMES]
+    with EpisodeWriter(tmp_path / "e.h5", {}) as w:
+        for i in range(n):
+            frame = {"step": np.int32(i), "flag": np.bool_(i % 2), "text": f"t{i}" if i % 5 == 0 else ""}
+            if i in gappy:
+                frame["gappy"] = np.array([i, -i], np.float32)
+            if i >= SMALL_BLOCK_FRAMES + 3:
+                frame["late"] = np.uint8(i) if i % 2 else np.int64(i + 254)     # cast to uint8: wraps
+            if i == n - 1:
+                frame["summary"] = np.arange(3)
+            w.append(frame)
+        w.write_final("step", np.int32(-1))
+    expected_gappy = np.zeros((gappy[-1] + 1, 2), np.float32)
+    expected_gappy[gappy] = np.array([[i, -i] for i in gappy])
+    late = np.zeros(n, np.uint8)
+    late[SMALL_BLOCK_FRAMES + 3:] = [np.uint8(i) if i % 2 else np.int64(i + 254).astype(np.uint8)
+                                     for i in range(SMALL_BLOCK_FRAMES + 3, n)]
+    with h5py.File(tmp_path / "e.h5") as f:
+        assert f["step"][()] == -1
+        assert f["flag"].dtype == bool and f["flag"][()].tolist() == [bool(i % 2) for i in range(n)]
+        np.testing.assert_array_equal(f["gappy"][()], expected_gappy)
+        assert f["late"].dtype == np.uint8
+        np.testing.assert_array_equal(f["late"][()], late)
+        assert f["summary"].shape == (n, 3) and not f["summary"][: n - 1].any()
+        assert [t.decode() for t in f["text"][()]] == [f"t{i}" if i % 5 == 0 else "" for i in range(n)]
 
 
 def test_a_failed_episode_leaves_nothing(tmp_path):

@@ -40,7 +40,7 @@ def _validate(path) -> tuple[int, str]:
 @pytest.mark.parametrize("dataset", [
     "cameras/chest/rgb",                         # an image chunk (Zstd)
     "cameras/chest/depth_m",                     # a float image chunk (Blosc LZ4: no checksum of its own)
-    "action/action",                             # a gzip chunk
+    "action/action",                             # a per-frame value chunk (Zstd, 256 frames)
     "cameras/chest/intrinsic",                   # an uncompressed static dataset: decodes, but differs
 ])
 def test_a_flipped_byte_names_the_file_and_the_dataset(episode_copy, dataset):
