@@ -19,7 +19,7 @@ import os
 import pickle
 import time
 
-from episodes.frame_messages import FrameSender
+from episodes.frame_messages import FrameSender, remove_stale_rings
 from episodes.render_pool import JOB, MAX_AHEAD, NEXT, STATE_SLOTS, TOTAL, WRITTEN, HelperChannels, help_render
 
 MAX_PROCESSES = 8        # desks cost 2 N (N - 1) pipe ends in the batch's process; on more, the tail matters less
@@ -123,6 +123,7 @@ class Desks:
         if not 2 <= processes <= MAX_PROCESSES:
             raise ValueError(f"render desks: expected 2 to {MAX_PROCESSES} processes, got {processes}")
         self.processes = processes
+        remove_stale_rings()        # of processes killed before their frames were read (a killed run's)
         self.desks = [Desk(ctx, processes - 1) for _ in range(processes)]
         self.claimed, self.claim_lock = ctx.RawValue("i", 1), ctx.Lock()
         self.finished = ctx.RawValue("b", 0)      # the batch has ended: helping processes stop
@@ -206,6 +207,8 @@ def take_desk(desks: Desks, me: int | None = None) -> int:
 
 def leave_desk() -> None:
     global _desks, _me, _standby
+    if _standby is not None:
+        _standby.close_receivers()
     _desks = _me = _standby = None
 
 

@@ -33,7 +33,7 @@ from typing import Iterator
 
 import numpy as np
 
-from episodes.frame_messages import FrameSender, receive_message
+from episodes.frame_messages import FrameReceiver, FrameSender, remove_stale_rings
 from episodes.workers import die_with_parent, one_core
 
 log = logging.getLogger(__name__)
@@ -158,6 +158,7 @@ class HelperChannels:
         self.count, self.max_ahead = count, max_ahead
         self._lock, self._state, self._readers = lock, state, readers
         self._lost: set[int] = set()     # helpers whose pipe ended or broke
+        self._receivers: dict = {}         # per reader: its FrameReceiver (the sender's ring, once it has one)
         self._jobs = 0
         self._busy = threading.Lock()
 
@@ -207,12 +208,24 @@ class HelperChannels:
             k = readers[reader]
             try:
                 while reader.poll():
-                    ok &= self._handle(receive_message(reader), job, pending, helpers, stats)
+                    ok &= self._handle(self._receiver(reader).receive(), job, pending, helpers, stats)
             except (EOFError, OSError):        # it died, perhaps mid-message
                 self._lost.add(k)
                 helpers.discard(k)
                 ok = False
         return ok
+
+    def _receiver(self, reader) -> FrameReceiver:
+        receiver = self._receivers.get(reader)
+        if receiver is None:
+            receiver = self._receivers[reader] = FrameReceiver(reader)
+        return receiver
+
+    def close_receivers(self) -> None:
+        """Unmap the helpers' rings (their pipes are the caller's to close)."""
+        for receiver in self._receivers.values():
+            receiver.close()
+        self._receivers.clear()
 
     def _handle(self, message, job: int, pending: dict, helpers: set, stats: list) -> bool:
         kind, helper, of_job, i, payload = message
@@ -243,6 +256,7 @@ class RenderHelpers(HelperChannels):
             raise ValueError(f"render helpers: expected at least 1, got {count}")
         ctx = multiprocessing.get_context("spawn")   # a forked child would inherit GL and h5py state
         self.owner = os.getpid()
+        remove_stale_rings()        # of helpers killed before their frames were read (a killed run's)
         super().__init__(count, max_ahead, ctx.Lock(), ctx.RawArray("q", STATE_SLOTS), [])
         self._tasks = [ctx.SimpleQueue() for _ in range(count)]
         self._procs = []
@@ -294,6 +308,7 @@ class RenderHelpers(HelperChannels):
             if p.is_alive():
                 p.kill()
                 p.join(timeout=5)
+        self.close_receivers()
         for reader in self._readers:
             reader.close()
 
