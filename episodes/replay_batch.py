@@ -3,7 +3,7 @@
 One recording on N workers shares its frames' render between processes (episodes/render_pool.py); its
 physics replay and the episode's assembly stay in one process, and sharing a frame costs a pipe copy.
 Several recordings on N workers go faster whole: this process and N-1 spawned ones each take the next
-recording and replay, render and assemble it, so every stage runs on every core and nothing passes
+recording (the longest left first) and replay, render and assemble it, so every stage runs on every core and nothing passes
 between them until the end: a process with none left to take helps render the others' last recordings
 (episodes/render_desk.py). Either way each episode is byte-identical to a one-worker
 replay of it.
@@ -22,6 +22,8 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 from typing import Iterator
+
+import h5py
 
 from episodes.render_desk import HELP_POLL_S, MAX_PROCESSES, Desks, help_for_a_while, leave_desk, take_desk
 from episodes.stages import raw_to_episode
@@ -74,7 +76,7 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
     take the next recording from one queue; a process with none left to take helps render the others'
     (episodes/render_desk.py). A spawned process that dies (out of memory, a crash in a native library)
     fails the recordings it was given; this one takes the rest."""
-    waiting, lock, finished = deque(items), threading.Lock(), queue.SimpleQueue()
+    waiting, lock, finished = deque(longest_first(items)), threading.Lock(), queue.SimpleQueue()
     helped: dict[int, int] = {}     # per spawned process: the frames it has rendered for the others so far
 
     def take() -> tuple[int, Path] | None:
@@ -149,6 +151,19 @@ def _whole_recordings(items: list[tuple[int, Path]], profile: SensorProfile, out
             leave_desk()
         if shared is not None:
             shared["frames_helped"] = (desks.frames_helped if desks else 0) + sum(helped.values())
+
+
+def longest_first(items: list[tuple[int, Path]]) -> list[tuple[int, Path]]:
+    """The recordings by their number of control steps, longest first (equal ones in the order given): the
+    batch's last work, which no other process can share (a recording's physics replay and its assembly),
+    is then a short recording's. One that cannot be read goes last, to fail in its turn."""
+    def steps(path: Path) -> int:
+        try:
+            with h5py.File(path, "r") as f:
+                return int(f["action"].shape[0])
+        except Exception:
+            return -1
+    return sorted(items, key=lambda item: -steps(item[1]))
 
 
 def _start_replay_worker(parent_pid: int, desks: Desks | None) -> None:

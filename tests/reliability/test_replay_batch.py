@@ -4,10 +4,12 @@ spawned process comes back as the same error."""
 
 import pickle
 
+import h5py
+import numpy as np
 import pytest
 
 from episodes.atomic import file_sha256
-from episodes.replay_batch import replay_recordings
+from episodes.replay_batch import longest_first, replay_recordings
 from evaluation.errors import TaskSpecError
 from sim.embodiment.fields import DescriptionError
 from sim.errors import SpecError, UnknownNameError
@@ -43,3 +45,16 @@ def test_the_projects_errors_cross_a_process_boundary_whole():
         error.worker_traceback = "text"
         back = pickle.loads(pickle.dumps(error))
         assert type(back) is type(error) and str(back) == str(error) and back.__dict__ == error.__dict__
+
+
+def test_a_batch_takes_the_longest_recordings_first_and_an_unreadable_one_last(tmp_path):
+    """So that the batch's last, unshared work is a short recording's."""
+    paths = []
+    for name, steps in [("a", 5), ("b", 40), ("c", 5), ("d", 12)]:
+        paths.append(tmp_path / f"{name}.raw.h5")
+        with h5py.File(paths[-1], "w") as f:
+            f.create_dataset("action", data=np.zeros((steps, 3)))
+    bad = tmp_path / "bad.raw.h5"
+    bad.write_bytes(b"not hdf5")
+    items = list(enumerate([bad, *paths]))
+    assert [p.name for _, p in longest_first(items)] == ["b.raw.h5", "d.raw.h5", "a.raw.h5", "c.raw.h5", "bad.raw.h5"]
