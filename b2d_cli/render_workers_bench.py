@@ -41,6 +41,8 @@ def parallel_render_figures(replay_path: Path, profile, workers: int, out_dir: P
                             "helpers_cpu_s": round(helper_cpu, 3), "cpu_s": round(own_cpu + helper_cpu, 3),
                             "setup_cpu_s": round(info["setup_cpu_s"], 3),     # every process's, once per file
                             "workers": info["workers"], "load_average_1min": round(load, 2),
+                            "helper_frames": info["helper_frames"],
+                            "helper_frames_through_pipe": info["helper_frames_through_pipe"],   # not the ring
                             # on idle cores the busiest process sets the wall time
                             "critical_path_cpu_s": round(max(own_cpu, helper_cpu / max(1, info["workers"] - 1)), 3)})
     identical = file_sha256(out_dir / "w1.render.h5") == file_sha256(out_dir / f"w{workers}.render.h5")
@@ -69,7 +71,8 @@ def parallel_render_figures(replay_path: Path, profile, workers: int, out_dir: P
                  "processes' load); speedup_on_idle_cores_from_cpu: one worker's CPU seconds over the busiest "
                  "process's CPU seconds (the wall time on idle cores); speedup_bound_from_cpu: N x one worker's CPU "
                  "over all processes' CPU; sharing_cpu_s: the CPU seconds sharing adds (each helper's scene and "
-                 "renderer, passing frames)"),
+                 "renderer, passing frames); helper_frames_through_pipe: helpers' frames that found no room in "
+                 "their shared-memory ring (or had none) and went through the pipe"),
     }
 
 

@@ -99,7 +99,7 @@ def help_render(task: tuple, index: int, out: FrameSender, lock, state, max_ahea
     except BaseException as exc:     # reported to the writer, which renders this helper's share itself
         out.send("error", index, job, None, f"{type(exc).__name__}: {exc}")
         return 0
-    setup_cpu, first, count = time.process_time() - cpu, time.time(), 0
+    setup_cpu, first, count, piped = time.process_time() - cpu, time.time(), 0, out.pipe_blocks
     try:
         while (i := _take(lock, state, job, max_ahead, index)) is not None:
             if i < 0:
@@ -117,7 +117,8 @@ def help_render(task: tuple, index: int, out: FrameSender, lock, state, max_ahea
     if count:
         out.send("done", index, job, None, {
             "frames": count, "seconds": frames.seconds(), "frame_windows": [(first, time.time())],
-            "setup_cpu_s": setup_cpu, "cpu_s": time.process_time() - cpu})
+            "setup_cpu_s": setup_cpu, "cpu_s": time.process_time() - cpu,
+            "frames_through_pipe": out.pipe_blocks - piped})      # not through the shared-memory ring
     return count
 
 

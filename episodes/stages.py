@@ -106,7 +106,8 @@ def render_to_file(replay_path: Path, profile: SensorProfile, out_path: Path, ma
     return {"frames": int(len(steps)), "frame_errors": stats["errors"], "profile": profile.name,
             "profile_hash": profile.content_hash, "workers": stats["workers"], "seconds": stats["seconds"],
             "frame_windows": stats["frame_windows"], "setup_cpu_s": stats["setup_cpu_s"],
-            "helper_cpu_s": stats["helper_cpu_s"], "helper_frames": stats["helper_frames"]}
+            "helper_cpu_s": stats["helper_cpu_s"], "helper_frames": stats["helper_frames"],
+            "helper_frames_through_pipe": stats["helper_frames_through_pipe"]}
 
 
 MIN_FRAMES_PER_WORKER = 8    # below this, a helper's scene and renderer cost more than it saves
@@ -161,7 +162,8 @@ def _render_steps(replay_path: Path, profile: SensorProfile, steps: np.ndarray, 
     return {"errors": errors, "seconds": seconds, "workers": 1 + sum(bool(s["frame_windows"]) for s in helped),
             "frame_windows": [(first, last)] + [w for s in helped for w in s["frame_windows"]],
             "setup_cpu_s": setup_cpu + sum(s["setup_cpu_s"] for s in helped),
-            "helper_cpu_s": sum(s["cpu_s"] for s in helped), "helper_frames": sum(s["frames"] for s in helped)}
+            "helper_cpu_s": sum(s["cpu_s"] for s in helped), "helper_frames": sum(s["frames"] for s in helped),
+            "helper_frames_through_pipe": sum(s["frames_through_pipe"] for s in helped)}
 
 
 # ---------------------------------------------------------------- assemble
