@@ -20,6 +20,7 @@ import logging
 import mmap
 import os
 import pickle
+import platform
 import queue
 import threading
 import time
@@ -31,7 +32,12 @@ log = logging.getLogger(__name__)
 
 SHM_DIR = Path("/dev/shm")
 RING_PREFIX = "b2d-frames-"
-RING_FRAMES = 4      # a ring holds this many blocks of the size of the first frame it was made for
+RING_FRAMES = 4      # a ring holds this many blocks of the size of the first frame it was made for,
+RING_MAX_BYTES = 64 << 20    # up to this (at least one block: paper frames, ~24 MB, get two)
+RING_MIN_BLOCK = 64 << 10    # smaller blocks (timings, errors) go through the pipe: one pipe write each
+# The read mark is a plain 8-byte store after the copy-out's loads; x86-64 keeps that order (and the
+# store whole), weaker memory models need not: elsewhere every block goes through the pipe.
+RING_MACHINES = {"x86_64", "AMD64"}
 RING_WAIT_S = 0.005  # a block that finds the ring full waits this long for the receiver, then takes the pipe
 HEADER = 64          # the ring's first bytes: the receiver's read mark (bytes ever read, int64)
 PIPE, ANNOUNCE = -1, -2     # a message's first pipe part: where its block is (ring generation, or these)
@@ -52,7 +58,8 @@ class FrameSender:
         self._conn, self._queue = conn, queue.SimpleQueue()
         self.broken = False         # the writer's end closed: nothing sent from here on arrives
         self._ring: _Ring | None = None
-        self._use_ring = use_ring and SHM_DIR.is_dir()
+        self._announce = False      # the ring is new: say its name before its first block
+        self._use_ring = use_ring and SHM_DIR.is_dir() and platform.machine() in RING_MACHINES
         self.ring_blocks = self.pipe_blocks = 0     # where this sender's blocks went (benchmarks)
         self._thread = threading.Thread(target=self._run, name="render-helper-sender", daemon=True)
         self._thread.start()
@@ -64,7 +71,7 @@ class FrameSender:
         sizes = np.array([part.nbytes if isinstance(part, memoryview) else len(part) for part in parts], np.int64)
         offsets = _offsets(sizes)
         total = int(offsets[-1] + sizes[-1])
-        start = self._reserve(total) if self._use_ring else None
+        start = self._reserve(total) if self._use_ring and total >= RING_MIN_BLOCK else None
         if start is None:
             self.pipe_blocks += 1
             block = np.empty(total, np.uint8)
@@ -73,6 +80,9 @@ class FrameSender:
             return
         self.ring_blocks += 1
         _copy_parts(self._ring.bytes, HEADER + start % self._ring.capacity, parts, offsets, sizes)
+        if self._announce:      # after the copy: the receiver never waits on it
+            self._queue.put((np.array([ANNOUNCE, self._ring.generation], np.int64).tobytes(), self._ring.name.encode()))
+            self._announce = False
         where = np.array([self._ring.generation, start], np.int64)
         self._queue.put((where.tobytes() + sizes.tobytes(), None))
 
@@ -91,7 +101,7 @@ class FrameSender:
             if now > deadline or self.broken:
                 return None
             time.sleep(0.0005)
-        ring.head = start + size
+        ring.head = _aligned(start + size)      # the next block starts aligned
         return start
 
     def _new_ring(self, size: int) -> "_Ring | None":
@@ -99,13 +109,15 @@ class FrameSender:
         if self._ring is not None:
             self._ring.close()
             self._ring = None
+        block = _aligned(size)
+        capacity = block * max(1, min(RING_FRAMES, RING_MAX_BYTES // block))
         try:
-            self._ring = _Ring(size * RING_FRAMES, generation)
+            self._ring = _Ring(capacity, generation)
         except OSError as exc:     # no /dev/shm, or too little of it: the pipe carries the frames
-            log.debug("frame ring of %d bytes not made (%s): frames go through the pipe", size * RING_FRAMES, exc)
+            log.debug("frame ring of %d bytes not made (%s): frames go through the pipe", capacity, exc)
             self._use_ring = False
             return None
-        self._queue.put((np.array([ANNOUNCE, generation], np.int64).tobytes(), self._ring.name.encode()))
+        self._announce = True
         return self._ring
 
     def _run(self) -> None:
@@ -129,8 +141,18 @@ class FrameSender:
     def close(self) -> None:
         self.finish()
         self._conn.close()
-        if self._ring is not None:
-            self._ring.close()
+        self.drop_ring()
+
+    def abandon(self) -> None:
+        """Stop sending and unmap the ring, without waiting for a reader that may be gone (the pipe end
+        is its owner's to close)."""
+        self.finish(wait=False)
+        self.drop_ring()
+
+    def drop_ring(self) -> None:
+        ring, self._ring = self._ring, None
+        if ring is not None:
+            ring.close()
 
 
 class FrameReceiver:
@@ -147,8 +169,7 @@ class FrameReceiver:
         where = int(header[0])
         if where == ANNOUNCE:
             name = self.reader.recv_bytes().decode()
-            if self._ring is not None:
-                self._ring.close()
+            self.close()        # the old ring is all read: a sender replaces its ring only then
             self._ring = _Ring.attach(name, int(header[1]))
             return self.receive()
         sizes = header[2:]
@@ -162,15 +183,15 @@ class FrameReceiver:
                 raise OSError(f"a frame in ring {where}, which this receiver has not been given")
             at = HEADER + start % ring.capacity
             block[:] = ring.bytes[at:at + len(block)]
-            ring.set_read_mark(start + len(block))      # the sender may reuse the space from here on
+            ring.set_read_mark(_aligned(start + len(block)))      # the sender may reuse the space up to here
         view = memoryview(block)
         head, *buffers = (view[start:start + size] for start, size in zip(offsets, sizes))
         return pickle.loads(head, buffers=buffers)
 
     def close(self) -> None:
-        if self._ring is not None:
-            self._ring.close()
-            self._ring = None
+        ring, self._ring = self._ring, None
+        if ring is not None:
+            ring.close()
 
 
 class _Ring:
@@ -225,27 +246,48 @@ class _Ring:
         return start if start + size - self.read_mark() <= self.capacity else None
 
     def close(self) -> None:
+        """Unmap. The file is the receiver's to remove as it attaches (a sender's close cannot know whether
+        its announcement is still in the pipe), or `remove_stale_rings`' once the sender is gone."""
+        if self.map.closed:
+            return
         del self._mark, self.bytes      # the mapping closes only once no array views it
         self.map.close()
-        if self.path.exists() and self.path.name.startswith(f"{RING_PREFIX}{os.getpid()}-"):
-            self.path.unlink(missing_ok=True)     # ours, never attached (the receiver removes it)
 
 
 def remove_stale_rings() -> None:
-    """Remove rings whose sender died before its receiver attached them."""
+    """Remove this user's rings whose sender has ended before a receiver attached them (a killed run's,
+    or announced as the run ended)."""
     if not SHM_DIR.is_dir():
         return
     for path in SHM_DIR.glob(f"{RING_PREFIX}*-*"):
         try:
+            if path.stat().st_uid != os.getuid():
+                continue
             pid = int(path.name[len(RING_PREFIX):].split("-")[0])
-            os.kill(pid, 0)
-        except ProcessLookupError:
-            path.unlink(missing_ok=True)
-        except (ValueError, PermissionError, OSError):
+        except (OSError, ValueError):
             continue
+        if not _running(pid):
+            try:
+                path.unlink(missing_ok=True)
+            except OSError:         # another process's to remove after all: left as it is
+                continue
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:         # there, but not ours to signal
+        return True
+    return True
 
 
 ALIGN = 64      # each array's bytes start at a multiple of this in a message's block (as numpy allocates)
+
+
+def _aligned(n: int) -> int:
+    return -(-n // ALIGN) * ALIGN
 
 
 def _offsets(sizes: np.ndarray) -> np.ndarray:

@@ -103,6 +103,13 @@ class Desk:
 
         return help_render(task, slot, self._sender, self.lock, self.state, MAX_AHEAD, still_wanted)
 
+    def drop_sender(self) -> None:
+        """Stop helping this desk for good: the sender's ring unmapped, its thread left to end (its reader
+        may be gone)."""
+        if self._sender is not None:
+            self._sender.abandon()
+            self._sender = None
+
     def keep_ends(self, mine: bool, slot: int | None) -> None:
         """Close the pipe ends this process does not use: on its own desk (`mine`) it only reads; on
         another's it writes through its `slot` only."""
@@ -206,9 +213,13 @@ def take_desk(desks: Desks, me: int | None = None) -> int:
 
 
 def leave_desk() -> None:
+    """The batch has ended: this process's rings are unmapped (a spawned process's go as it exits)."""
     global _desks, _me, _standby
     if _standby is not None:
         _standby.close_receivers()
+    if _desks is not None:
+        for desk in _desks.desks:
+            desk.drop_sender()
     _desks = _me = _standby = None
 
 

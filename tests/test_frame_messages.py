@@ -11,11 +11,11 @@ import pytest
 from episodes import frame_messages
 from episodes.frame_messages import RING_PREFIX, SHM_DIR, FrameReceiver, FrameSender, remove_stale_rings
 
-BIG = 50_000      # bytes: more than a ring made for the small frames holds
+SMALL, BIG = 70_000, 400_000     # bytes of a frame: a ring made for small ones has no room for a big one
 
 
 def _frame(i: int, big: bool) -> dict:
-    return {"rgb": np.full((BIG if big else 1000,), i % 251, np.uint8), "pose": np.arange(i, i + 5.0),
+    return {"rgb": np.full((BIG if big else SMALL,), i % 251, np.uint8), "pose": np.arange(i, i + 5.0),
             "odd": np.arange(12.0)[::2]}      # not contiguous: pickled in-band
 
 
@@ -64,13 +64,14 @@ def test_blocks_through_the_ring_or_the_pipe_arrive_the_same_in_order_and_leave_
         assert a.keys() == b.keys()
         for key in a:
             assert a[key].dtype == b[key].dtype and np.array_equal(a[key], b[key]), (i, key)
-        assert a["rgb"].size == (BIG if i == 30 else 1000) and (a["rgb"] == i % 251).all()
+        assert a["rgb"].size == (BIG if i == 30 else SMALL) and (a["rgb"] == i % 251).all()
         a["rgb"][0] = 0     # writable, as a block read from the pipe
     assert _ours() == before
 
 
 @pytest.mark.skipif(not SHM_DIR.is_dir(), reason="no /dev/shm")
 def test_blocks_that_find_the_ring_full_go_through_the_pipe_in_their_turn():
+    before = _ours()
     reader, writer = multiprocessing.Pipe(duplex=False)
     sender, receiver = FrameSender(writer), FrameReceiver(reader)
     for i in range(10):             # nobody reads yet: the ring takes the first RING_FRAMES
@@ -83,18 +84,20 @@ def test_blocks_that_find_the_ring_full_go_through_the_pipe_in_their_turn():
     assert receiver.receive()[3] == 10 and sender.ring_blocks == frame_messages.RING_FRAMES + 1
     sender.close()
     receiver.close()
-    assert _ours() == []
+    assert _ours() == before
 
 
 @pytest.mark.skipif(not SHM_DIR.is_dir(), reason="no /dev/shm")
 def test_a_ring_that_cannot_be_allocated_sends_through_the_pipe(monkeypatch):
-    monkeypatch.setattr(frame_messages, "RING_FRAMES", 1 << 40)   # a ring far larger than /dev/shm
+    before = _ours()
+    monkeypatch.setattr(frame_messages, "RING_FRAMES", 1 << 40)       # a ring far larger than /dev/shm
+    monkeypatch.setattr(frame_messages, "RING_MAX_BYTES", 1 << 62)
     read, write = os.pipe()
     os.close(read)
     sender = FrameSender(multiprocessing.connection.Connection(write, readable=False))
     sender.send("frame", 0, 1, 0, _frame(0, False))
     sender.close()      # its thread found the pipe closed: nothing to read it
-    assert (sender.ring_blocks, sender.pipe_blocks) == (0, 1) and _ours() == []
+    assert (sender.ring_blocks, sender.pipe_blocks) == (0, 1) and _ours() == before
 
 
 @pytest.mark.skipif(not SHM_DIR.is_dir(), reason="no /dev/shm")
@@ -112,3 +115,35 @@ def test_stale_rings_of_dead_processes_are_removed_and_live_ones_kept():
     finally:
         dead.unlink(missing_ok=True)
         live.unlink(missing_ok=True)
+
+
+@pytest.mark.skipif(not SHM_DIR.is_dir(), reason="no /dev/shm")
+def test_a_ring_the_receiver_cannot_open_is_an_os_error_and_both_ends_still_close():
+    """As a helper's death is: the writer marks the helper lost and renders its frames itself."""
+    reader, writer = multiprocessing.Pipe(duplex=False)
+    sender, receiver = FrameSender(writer), FrameReceiver(reader)
+    sender.send("frame", 0, 1, 0, _frame(0, False))
+    sender.finish()     # all sent: the announcement and the block
+    for ring in set(_ours()):
+        if ring.startswith(f"{RING_PREFIX}{os.getpid()}-"):
+            (SHM_DIR / ring).unlink()       # gone before the receiver reads its announcement
+    with pytest.raises(OSError):
+        receiver.receive()
+    for _ in range(2):
+        receiver.close()
+        sender.close()
+
+
+@pytest.mark.skipif(not SHM_DIR.is_dir() or os.getuid() != 0, reason="needs /dev/shm and a file of another user")
+def test_another_users_ring_is_left_alone():
+    child = multiprocessing.get_context("spawn").Process(target=time.sleep, args=(0,))
+    child.start()
+    child.join()
+    theirs = SHM_DIR / f"{RING_PREFIX}{child.pid}-2"
+    try:
+        theirs.write_bytes(b"x")
+        os.chown(theirs, 65534, 65534)
+        remove_stale_rings()
+        assert theirs.exists()
+    finally:
+        theirs.unlink(missing_ok=True)
