@@ -10,8 +10,10 @@ processes) and sends through the pipe only where it lies: a pipe passes 64 KB at
 through it costs the two processes two more copies and a system call each way per 64 KB (preview frames:
 ~0.5 MB, paper: ~24 MB). The receiver copies the block out at once and moves the ring's read mark,
 which is all the sender waits for; so the ring's messages are read in the order they were sent, like the
-pipe's. Without /dev/shm, or with too little of it, every block goes through the pipe; so does one that
-finds the ring full. The bytes received are the same either way.
+pipe's. Without /dev/shm, or with too little of it, and on machines other than x86-64 (RING_MACHINES),
+every block goes through the pipe; so do blocks under 64 KB and one that finds the ring full. The bytes
+received are the same either way. The receiver removes the ring's file as it attaches it, so only a run
+killed in between leaves one, which the next run's `remove_stale_rings` removes.
 """
 
 from __future__ import annotations
