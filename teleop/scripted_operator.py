@@ -83,11 +83,14 @@ class ScriptedOperator:
                 if short in grasp.close:
                     closed[i] = np.clip(grasp.close[short], lo[i], hi[i])
                 group[i] = 1 if short in grasp.late else 0
+            # a pick's thin_grasp: the hand file's targets for a thin object where it declares them
+            thin = np.array([np.clip(grasp.thin_close.get(n.removeprefix(f"{side}_"), c), l, h)
+                             for n, c, l, h in zip(lay.hand_actuators, closed, lo, hi)])
             q_home = self.ctrl_home[arm_ids]
             pos0, quat0 = kin.fk(q_home)
             start = STAGGER_STEPS if side == "left" else 0
             self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
-                                "closed": closed, "group": group, "grasp_centre": grasp.centre,
+                                "closed": closed, "thin_closed": thin, "group": group, "grasp_centre": grasp.centre,
                                 "tabletop": hand.tabletop_grasp is not None, "hand": hand.name,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
                                 "looks": [], "q": q_home.copy(), "q_home": q_home.copy(),

@@ -7,7 +7,7 @@ mirrored from it (see ``mirror.py``)."""
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -81,6 +81,7 @@ class TabletopGrasp:
     centre: np.ndarray          # object centre in the wrist-site frame (x lateral, y palm normal, z fingers)
     close: dict[str, float]     # actuator -> closing target
     late: tuple[str, ...]       # actuators that close only after the others have formed a wall
+    thin_close: dict[str, float] = field(default_factory=dict)   # a pick's thin_grasp: these targets instead
 
 
 @dataclass(frozen=True)
@@ -226,9 +227,10 @@ def read_hand_file(path: Path) -> HandDescription:
     tabletop = None
     if m.tabletop_grasp is not None:
         g = m.tabletop_grasp
-        for field_name, keys in (("close", g.close), ("late", g.late)):
+        for field_name, keys in (("close", g.close), ("late", g.late), ("thin_close", g.thin_close)):
             _check_actuators(keys, act_names, ctx.sub(f"tabletop_grasp.{field_name}"))
-        tabletop = TabletopGrasp(centre=np.asarray(g.centre, float), close=dict(g.close), late=tuple(g.late))
+        tabletop = TabletopGrasp(centre=np.asarray(g.centre, float), close=dict(g.close), late=tuple(g.late),
+                                 thin_close=dict(g.thin_close))
     tactile = hand_tactile(m.tactile, ctx.sub("tactile"), {link.name for link in links}, fingers)
     real_model = None
     if m.real_model is not None:

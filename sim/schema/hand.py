@@ -63,6 +63,7 @@ class TabletopGrasp(CatalogModel):
     centre: Point3
     close: dict[str, Number]
     late: list[Name] = []
+    thin_close: dict[str, Number] = {}      # a pick's thin_grasp: these actuators' targets instead (a thin bottle)
 
 
 # MediaPipe's fingertip landmarks (sim/embodiment/retarget_spec.py)

@@ -9,9 +9,9 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from ..base import Bool, Int, Name, Number, is_number
 from .fields import (CARRY_RANGE_S, GRASP_YAW_ACROSS, LIFT_RANGE_M, OPEN_RANGE_S, ObjectAxis, ObjectPoint,
-                     PICK_GRASPS, PLACE_FROM_FRONT, PRESS_RANGE_M, PlaceFrom, PlaceOffset, RollDeg, SlideClearance,
-                     TABLE_TARGET, TaskObject, VIA_TIMES_RANGE, an_object, front_container, only_with_grasp,
-                     side_grasp_roll, slid_in)
+                     PICK_GRASPS, PLACE_FROM_FRONT, PRESS_RANGE_M, PlaceFrom, PlaceOffset, RollDeg, SIDE_GRASP,
+                     SlideClearance, TABLE_TARGET, TaskObject, VIA_TIMES_RANGE, an_object, front_container,
+                     only_with_grasp, side_grasp_roll, slid_in)
 from .step import GraspFields, PlanStep, ViaStop
 
 
@@ -51,8 +51,10 @@ class PickStep(PlanStep, GraspFields):
     how long the hand opens over the place before it rises (default 1/3 s: fingers wedged on the object open
     late, and the rising hand lifts it out). close_thumb_last:
     true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
-    into the fingers' wall). return_home: true sends the hand back to its home pose once it has let go, rather
-    than leaving it risen over the place (where the other arm reaches in next)."""
+    into the fingers' wall); thin_grasp: true closes a palm grasp to the hand file's targets for a thin object
+    where it declares them (tabletop_grasp.thin_close: a 4 cm bottle that fingers eased for a wide jar would not
+    reach; other hands close as without it). return_home: true sends the hand back to its home pose once it has
+    let go, rather than leaving it risen over the place (where the other arm reaches in next)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -78,6 +80,8 @@ class PickStep(PlanStep, GraspFields):
     release_relax: Number = Field(None, gt=0.0, le=1.0, description="a fraction in (0, 1]")
     # palm grasp: the thumb closes after the fingers, whatever the hand file's `late` (plan_steps/pick_place.py)
     close_thumb_last: Bool = False
+    # palm grasp: the hand file's targets for a thin object where it declares them (plan_steps/pick_place.py)
+    thin_grasp: Bool = False
     # lifted this far over the grasp and carried this far over the place (default LIFT_HEIGHT_M, 14 cm): a lower
     # carry, less swing for a piece held by its edges (teleop/plan_steps/pick_place.py)
     lift_m: Number = Field(None, ge=LIFT_RANGE_M[0], le=LIFT_RANGE_M[1],
@@ -135,6 +139,8 @@ class PickStep(PlanStep, GraspFields):
     _side_only = field_validator("grasp_roll_deg", mode="before")(side_grasp_roll)
     _power_only = field_validator("close_thumb_last", mode="before")(
         only_with_grasp("power", "the order a palm grasp closes in"))
+    _palm_only = field_validator("thin_grasp", mode="before")(
+        only_with_grasp(("power", SIDE_GRASP), "how far a palm grasp closes"))
     _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", "place_yaw",
                                        "ease_turned", mode="before")(
         only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
