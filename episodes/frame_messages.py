@@ -18,6 +18,7 @@ killed in between leaves one, which the next run's `remove_stale_rings` removes.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import mmap
 import os
@@ -196,6 +197,9 @@ class FrameReceiver:
             ring.close()
 
 
+_ring_numbers = itertools.count()     # rings this process has made (a ring's file name: pid, number, time)
+
+
 class _Ring:
     """A shared-memory ring of message blocks: one sender writes, one receiver copies out. Positions
     count bytes ever written; a block never wraps round the end (the sender skips to the start)."""
@@ -203,7 +207,7 @@ class _Ring:
     def __init__(self, capacity: int, generation: int, path: Path | None = None):
         self.capacity, self.generation, self.head = capacity, generation, 0
         create = path is None
-        self.path = path or SHM_DIR / f"{RING_PREFIX}{os.getpid()}-{time.monotonic_ns()}"
+        self.path = path or SHM_DIR / f"{RING_PREFIX}{os.getpid()}-{next(_ring_numbers)}-{time.monotonic_ns()}"
         fd = os.open(self.path, os.O_RDWR | (os.O_CREAT | os.O_EXCL if create else 0), 0o600)
         try:
             if create:
