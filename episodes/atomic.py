@@ -12,6 +12,8 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from episodes.processes import is_running
+
 log = logging.getLogger(__name__)
 
 
@@ -79,18 +81,6 @@ _TEMPORARY = re.compile(r"\..+\.(?:tmp|old)-(\d+)(?:\.[^.]*)?|\.[a-z-]+-(\d+)-[a
 _cleaned: set[Path] = set()
 
 
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:     # another user's process
-        return True
-    return True
-
-
 def clean_stale_temporaries(directory: str | os.PathLike) -> list[Path]:
     """Delete the temporaries that processes no longer running left in `directory` (after a kill -9
     or a power cut they stayed forever: issue 23). A live process's temporaries are kept, so runs
@@ -102,7 +92,7 @@ def clean_stale_temporaries(directory: str | os.PathLike) -> list[Path]:
     removed = []
     for entry in directory.iterdir():
         match = _TEMPORARY.fullmatch(entry.name)
-        if not match or _alive(int(match.group(1) or match.group(2))):
+        if not match or is_running(int(match.group(1) or match.group(2))):
             continue
         if entry.is_dir() and not entry.is_symlink():
             shutil.rmtree(entry, ignore_errors=True)

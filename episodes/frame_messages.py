@@ -31,6 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
+from episodes.processes import is_running
+
 log = logging.getLogger(__name__)
 
 SHM_DIR = Path("/dev/shm")
@@ -272,21 +274,11 @@ def remove_stale_rings() -> None:
             pid = int(path.name[len(RING_PREFIX):].split("-")[0])
         except (OSError, ValueError):
             continue
-        if not _running(pid):
+        if not is_running(pid):
             try:
                 path.unlink(missing_ok=True)
             except OSError:         # another process's to remove after all: left as it is
                 continue
-
-
-def _running(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:         # there, but not ours to signal
-        return True
-    return True
 
 
 ALIGN = 64      # each array's bytes start at a multiple of this in a message's block (as numpy allocates)

@@ -20,6 +20,7 @@ import pickle
 import time
 
 from episodes.frame_messages import FrameSender, remove_stale_rings
+from episodes.processes import is_running
 from episodes.render_pool import JOB, MAX_AHEAD, NEXT, STATE_SLOTS, TOTAL, WRITTEN, HelperChannels, help_render
 
 MAX_PROCESSES = 8        # desks cost 2 N (N - 1) pipe ends in the batch's process; on more, the tail matters less
@@ -80,7 +81,7 @@ class Desk:
             return 0, None
         if self._task is None or self._task[0] != job:
             self._task = self.posted.get()      # posted just after the counters were set: maybe not yet
-        if self._task is None or self._task[0] != job or not _alive(self.owner.value):
+        if self._task is None or self._task[0] != job or not is_running(self.owner.value):
             return 0, None
         return left, self._task
 
@@ -95,7 +96,7 @@ class Desk:
 
         def still_wanted() -> bool:      # asked while the render's process holds this one back
             nonlocal written, since
-            if self._sender.broken or not _alive(self.owner.value):
+            if self._sender.broken or not is_running(self.owner.value):
                 return False
             if self.state[WRITTEN] != written:
                 written, since = self.state[WRITTEN], time.monotonic()
@@ -186,7 +187,7 @@ class StandbyHelpers(HelperChannels):
 
     def _helper_alive(self, k: int) -> bool:
         pid = self.desk.helper_pids[k]
-        return pid == 0 or _alive(pid)      # one that never helped has no frame of ours
+        return pid == 0 or is_running(pid)      # one that never helped has no frame of ours
 
     def _hand_out(self, task: tuple, helpers: set[int]) -> None:
         self.desk.posted.put(task)          # one post for every slot: whichever process is idle takes it up
@@ -235,20 +236,3 @@ def help_for_a_while() -> tuple[int, int]:
     HELP_SLICE_S (its feeder calls again until the batch ends); (this process, the frames it has rendered
     for them so far)."""
     return os.getpid(), _desks.help_for(_me, HELP_SLICE_S)
-
-
-def _alive(pid: int) -> bool:
-    """Whether process `pid` runs: a child that died stays as a zombie until its parent reaps it."""
-    if pid <= 0:
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    try:
-        with open(f"/proc/{pid}/stat", "rb") as f:
-            return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
-    except (OSError, IndexError):        # no /proc (not Linux): taken as running
-        return True
