@@ -104,6 +104,7 @@ class HandDescription:
     servo_error_at_full_effort: float
     path: Path
     real_model: Any = None         # real_model.RealModelSpec: optional real MJCF for this hand
+    heavy_side_hold: str = "edge"  # a heavy object taken from the side held by its end edge, or round its body
 
     @property
     def joints(self) -> list[JointSpec]:
@@ -247,5 +248,5 @@ def read_hand_file(path: Path) -> HandDescription:
         home=home, fingers=tuple(fingers), grasp_probe=probe, tabletop_grasp=tabletop,
         contact_exclude=contact_excludes(m.contact_exclude, ctx, {link.name for link in links}),
         servo_error_at_full_effort=m.servo_error_at_full_effort,
-        path=path, real_model=real_model,
+        path=path, real_model=real_model, heavy_side_hold=m.heavy_side_hold,
     )

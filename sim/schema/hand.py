@@ -102,6 +102,9 @@ class HandFile(CatalogModel):
     home: dict[str, Angle] | None = None
     grasp_probe: GraspProbe | None = None
     tabletop_grasp: TabletopGrasp | None = None
+    # how the hand carries a heavy object taken from the side (a bottle handed over): "edge", its fingers
+    # hooked round the object's end edge; "body", round its body at its mass centre (a handover's body_hold)
+    heavy_side_hold: Literal["edge", "body"] = "edge"
     tactile: TactileBlock
     real_model: RealModel | None = None
     retarget: Retarget | None = None

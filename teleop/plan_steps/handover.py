@@ -26,6 +26,7 @@ from teleop.plan_steps.pick_place import (CLOSED, PALM_NORMAL, SIDE_GRASP_IN_M, 
                                          grasp_and_lift, side_roll)
 
 HANDOVER_STEPS = 120      # the giver carries the object to the handover point slowly: a heavy bottle swings
+BODY_HOLD = "body"        # a hand file's heavy_side_hold that takes a handover's body_hold
 LOOK_RANGE_M = 2 * NOT_IN_HAND_M   # the take point found farther than this from its plan: dropped, nothing to take
 
 
@@ -35,6 +36,7 @@ def at_point(op: PlanningOperator, item: dict) -> np.ndarray:
 
 
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
+    item = for_the_hand(op, item)
     name = item["handover"]
     giver, taker = op.sides[item["hand"]], op.sides[item["to_hand"]]
     offset, rotation = in_giving_hand(op, data, item, name)
@@ -43,6 +45,14 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     t_offset = taker_closes(op, data, item, name, at, rotation)
     giver_lets_go(op, giver, taker)
     keep(op, item["to_hand"], name, t_offset, rotation)
+
+
+def for_the_hand(op: PlanningOperator, item: dict) -> dict:
+    """The step with its `body_hold` fields in place of its own on an embodiment whose hand carries a heavy
+    object round its body (its file's `heavy_side_hold: body`; both sides have the same hand)."""
+    if "body_hold" not in item or op.sides[item["to_hand"]]["heavy_side_hold"] != BODY_HOLD:
+        return item
+    return {**item, **item["body_hold"]}
 
 
 def in_giving_hand(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str) -> tuple[np.ndarray, np.ndarray]:

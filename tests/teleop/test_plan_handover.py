@@ -149,3 +149,19 @@ def test_grasp_closure_closes_a_tabletop_grasp_further(tmp_path, embodiment, tab
     lo, hi = op.scene.model.actuator_ctrlrange[left["hand_ids"]].T
     expected = np.clip(left["open"] + 1.3 * (left["closed"] - left["open"]), lo, hi) if tabletop else left["closed"]
     np.testing.assert_allclose(held, expected)
+
+
+def _frames(steps, tmp_path, embodiment):
+    data, op = home_and_plan(demonstration_scene(_task(steps, tmp_path), embodiment))
+    return [(f.end_step, *f.pos, *f.quat, *f.hand)
+            for side in sorted(op.sides) for f in op.sides[side]["timeline"].frames]
+
+
+@pytest.mark.parametrize(("embodiment", "body"), [("ur5_shadow", True), ("ur5_rh5dg2", False)])
+def test_body_hold_takes_the_place_of_the_take_on_a_hand_that_holds_by_the_body(tmp_path, embodiment, body):
+    """A handover's `body_hold` (take_point, take_roll_deg) is planned instead of the step's own on an embodiment
+    whose hand file declares `heavy_side_hold: body` (the Shadow's); other hands plan the step as written."""
+    hold = {"take_point": [0.0, 0.0, -0.035], "take_roll_deg": 100}
+    planned = _frames([{**GIVE, "body_hold": hold}], tmp_path, embodiment)
+    assert planned == _frames([{**GIVE, **hold}] if body else [GIVE], tmp_path, embodiment)
+    assert planned != _frames([GIVE] if body else [{**GIVE, **hold}], tmp_path, embodiment)
