@@ -34,6 +34,9 @@ With `roll_first` (opt-in) the hand, before it sets off, rolls about its fingers
 then swings them round on its way: turned over from a palm push (thumb up) to a lever pushed thumb down, half a turn
 about a level axis in one move, the UR5's wrist_1 folded the wrist onto its forearm (the IK's branch from there);
 rolled first, the last wrist joint takes the half turn.
+With `plan_from` (opt-in) the turn is planned from that angle, not from where earlier steps leave the link: a second
+shut of a door a first shut, reaching over it at its widest, may leave ajar (the plan has it shut, so a plain second
+turn plans nothing); with `start_look` the hand meets the door where it really is, and pushes nothing if it is shut.
 """
 
 from __future__ import annotations
@@ -82,6 +85,8 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     tl: SideTimeline = side["timeline"]
     link = Hinge(op.scene.model, data, item["turn"], op.scene.task.source)
     start = op.link_angles.get(item["turn"], link.angle)
+    if item.get("plan_from") is not None:       # opt-in: planned from this angle (a re-shut: see the docstring)
+        start = float(item["plan_from"])
     target = float(item["to"])
     # opt-in `speed` (m/s of the contact along the arc): a door swung as briskly as a person swings it
     arc_step_m = item["speed"] / CONTROL_HZ if "speed" in item else ARC_SPEED_M_PER_STEP

@@ -11,7 +11,7 @@ from .step import PlanStep
 
 class TurnStep(PlanStep):
     """{hand, turn: <object>/<link>, to: <angle, rad>, [palm_from], [palm_look], [start_look], [speed], [return_home],
-    [approach_over], [withdraw_past_end], [roll_first], [after], [wait_s]}: swing a
+    [approach_over], [withdraw_past_end], [roll_first], [plan_from], [after], [wait_s]}: swing a
     hinge-jointed link (a lid, a door) to an angle within its joint range; from the link angle palm_from
     on (rad, within the range) the flat palm pushes, fingers along the hinge, instead of the fingertips;
     palm_look: true (with palm_from) re-aims the palm at the link's angle as the fingertips let go of it;
@@ -22,7 +22,9 @@ class TurnStep(PlanStep):
     brings the hand to the link from above its top; withdraw_past_end: true takes the hand, once it lets go,
     out along the link past its free end before it goes on (round that end, not over the link: with home on the
     link's other side, round the end to that side first); roll_first: true has the hand, before it sets off, roll
-    about its fingers where it is to the turn's roll, then swing them round on its way."""
+    about its fingers where it is to the turn's roll, then swing them round on its way; plan_from (rad, within the
+    range) plans the turn from that angle rather than from where earlier steps leave the link (with start_look: a
+    re-shut of a door an earlier turn meant to shut, met where it really stopped)."""
 
     turn: Name
     to: Number
@@ -47,6 +49,9 @@ class TurnStep(PlanStep):
     # true: the hand first rolls about its fingers where it is, then swings them round on its way to the link (from a
     # palm push, thumb up, to a lever pushed thumb down: turned over in one move the UR5's wrist folded onto its forearm)
     roll_first: Bool = False
+    # an angle: the turn is planned from it, not from where earlier steps leave the link (a second shut of a door the
+    # first may leave ajar; with start_look the hand meets the door where it is, nothing left to push if it is shut)
+    plan_from: Number = None
 
     @field_validator("turn", mode="before")
     @classmethod
@@ -54,7 +59,7 @@ class TurnStep(PlanStep):
         hinges = hinge_ranges(info)
         return one_of(link, hinges, f"a hinge-jointed link from {sorted(hinges)}")
 
-    @field_validator("to", "palm_from", mode="before")
+    @field_validator("to", "palm_from", "plan_from", mode="before")
     @classmethod
     def _within_the_range(cls, angle, info: ValidationInfo):
         link = info.data.get("turn")
