@@ -26,6 +26,7 @@ from sim.scene.builder import Scene
 from teleop.operator_motion import (DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation, roll_then_swing,
                                     quat as motion_quat)
 from teleop.plan_steps import PLANNERS
+from teleop.plan_steps.park import rest_pos, wait_parked
 from teleop.transit import hand_outline, bounding_box_points, obstacles, transit_height
 
 CLOSED_FRACTION = 0.9         # actuators the grasp does not name: how far towards their far end
@@ -98,6 +99,7 @@ class ScriptedOperator:
                                 "timeline": SideTimeline(pos0, quat0, open_, start),
                                 "home": (pos0, quat0), "name": side}
         ends: list[int] = []         # each step's last control step
+        rest_out: dict[str, float] = {}     # per hand: its last step's park_out_m
         for item in scene.task.demo_plan:
             # `hand: both` (sim/demo_plan.py BOTH_HANDS): both timelines start together, once both are free
             tls = [s["timeline"] for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)]
@@ -105,15 +107,18 @@ class ScriptedOperator:
             wait_until += round(item.get("wait_s", 0.0) * CONTROL_HZ)     # opt-in: a pause after those
             if len(tls) > 1:
                 wait_until = max(wait_until, *(tl.end for tl in tls))
-            for tl in tls:
-                if wait_until > tl.end:
-                    tl.add(wait_until - tl.end)     # the hand holds still until those steps are done
+            out_m = item.get("park_out_m", 0.0)
+            for side in (s for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)):
+                # the hand holds still until those steps are done (opt-in: parked out of the other arm's way)
+                wait_parked(self, data, side, out_m, wait_until)
+                rest_out[side["name"]] = out_m
             PLANNERS[step_kind(item)](self, data, item)
             ends.append(max(tl.end for tl in tls))
             self.moves += [(ends[-1], *left) for left in self._leaving]
             self._leaving = []
         for side in self.sides.values():
-            side["timeline"].add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1], hand=side["open"])
+            rest = rest_pos(self, data, side, rest_out.get(side["name"], 0.0))   # home, or parked (its last step's)
+            side["timeline"].add(DURATIONS["approach"], pos=rest, quat=side["home"][1], hand=side["open"])
         self.length = max(s["timeline"].end for s in self.sides.values()) + SETTLE_STEPS
 
     def object_pos(self, data, name) -> np.ndarray:

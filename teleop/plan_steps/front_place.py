@@ -10,6 +10,8 @@ not walls. The rays start at the cavity's centre raised or lowered to the height
 comes out: a shelf across the cavity's middle (a fridge's) is not in their way there.
 With `slide_fingers_in` (opt-in) the hand turns about the vertical on its way to the opening so that its
 fingers point straight in, and the arm behind it comes through the mouth rather than across the container's side.
+With `slide_as_held` (opt-in) the look outside the opening moves the slide for where the object sits in the hand
+but leaves the hand's turn as planned: an object lying on its side (a banana) has no up to stand it by.
 """
 
 from __future__ import annotations
@@ -176,10 +178,12 @@ def carry_and_place_front(op: PlanningOperator, data: mujoco.MjData, item: dict,
     tl.add(DURATIONS["open"], hand=side["open"])
     tl.add(DURATIONS["retreat"], pos=place + rise * UP)
     tl.add(DURATIONS["retreat"], pos=place + rise * UP + back * out)
-    # ... and how it leans: it goes in upright (a bottle handed over hangs in the hand as the giver let it go)
+    # ... and how it leans: it goes in upright (a bottle handed over hangs in the hand as the giver let it go);
+    # `slide_as_held`: only where it sits (a banana rolled in the grip has no up, the turn pitched the hand)
     up = data.xmat[op.scene.object_body_ids[name]].reshape(3, 3).T @ UP     # its up as it stood
     op.on_frame_end(side, first - 1, upright_look(op, side, name, up, R_hand, offset.copy(),
-                                                  range(first, len(tl.frames)), recentre_when_upright=True))
+                                                  range(first, len(tl.frames)), recentre_when_upright=True,
+                                                  turn=not item.get("slide_as_held")))
     op.look_again(side, item["place"], data, carry_frame, len(tl.frames))
     tl.add(DURATIONS["approach"], pos=side["home"][0], quat=side["home"][1])
 

@@ -21,6 +21,7 @@ PINCH_FINGERS = ("index", "middle", "ring", "little")   # pinch_fingers: what a 
 PLACE_FROM_FRONT = "front"
 PLACE_FROM = ("above", PLACE_FROM_FRONT)   # lowered from above, or slid in through a side opening
 WAIT_RANGE_S = (0.0, 60.0)
+PARK_OUT_RANGE_M = (0.0, 0.2)    # park_out_m: a hand parked this far outward of its home
 APPROACH_PITCH_RANGE_DEG = (0.0, 80.0)
 DRAG_HOOK_DEPTH_M = 0.02    # drag: curled fingertips this far below the container's rim
 DRAG_PITCH_DEG = 20.0       # ... the fingers tilted this far down into it
@@ -53,7 +54,7 @@ SlideClearance = Annotated[Number, Field(ge=SLIDE_CLEARANCE_RANGE_M[0], le=SLIDE
 
 
 def slid_in(value, info: ValidationInfo):
-    """slide_clearance_m, slide_fingers_in only with place_from: front (nothing slides in otherwise)."""
+    """slide_clearance_m, slide_fingers_in, slide_as_held only with place_from: front (nothing slides in otherwise)."""
     if info.data.get("place_from") != PLACE_FROM_FRONT:
         raise ValueError(f"no {info.field_name} without place_from: {PLACE_FROM_FRONT} (nothing slides in)")
     return value

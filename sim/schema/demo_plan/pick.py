@@ -22,7 +22,9 @@ class PickStep(PlanStep, GraspFields):
     container is open at (a microwave, a fridge shelf; place_offset's dz then from the cavity floor), its bottom
     slide_clearance_m over the cavity floor as it slides in (default 4 cm), and with slide_fingers_in: true the
     hand turned about the vertical on the way so that its fingers point straight in (the arm behind it through the
-    mouth, not across the container's side).
+    mouth, not across the container's side); slide_as_held: true slides it in as it sits in the hand, the look
+    outside the opening moving the slide for where it sits but not turning the hand to stand it as it stood (a
+    banana lying on its side has no up: rolled in the grip, that turn pitched the hand).
     grasp_point is where a power grasp closes, or the part a pinch closes on (a bowl's rim), in the
     object's frame; pinch_fingers [index, middle, ...] are the fingers a pad pinch closes the thumb against
     (default the hand's own set, teleop/pinch_grasp.py), pinch_clear_tips: true spreads it until the fingertips,
@@ -112,6 +114,10 @@ class PickStep(PlanStep, GraspFields):
     # place_from: front: the hand turned about the vertical on the way so its fingers point straight in
     slide_fingers_in: Bool = False
     _fingers_in_only = field_validator("slide_fingers_in", mode="before")(slid_in)
+    # place_from: front: the look outside the opening moves the slide for where the object sits in the hand, but
+    # does not turn the hand to stand it as it stood when picked (teleop/plan_steps/upright_look.py)
+    slide_as_held: Bool = False
+    _as_held_only = field_validator("slide_as_held", mode="before")(slid_in)
 
     @field_validator("hold", mode="before")
     @classmethod

@@ -8,9 +8,9 @@ from typing import Annotated, ClassVar, Literal
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from ..base import Bool, CatalogModel, Int, Name, Number, is_number
-from .fields import (APPROACH_PITCH_RANGE_DEG, FOLD_RANGE, GRASP_YAW_ACROSS, HANDS, ObjectPoint, PINCH_FINGERS,
-                     PLAN_GRASPS, PlaceOffset, SQUEEZE_RANGE_M, TIPS_HEIGHT_RANGE_M, VIA_KINDS, WAIT_RANGE_S,
-                     an_object, container_names, one_of, only_with_grasp, plan_scope)
+from .fields import (APPROACH_PITCH_RANGE_DEG, FOLD_RANGE, GRASP_YAW_ACROSS, HANDS, ObjectPoint, PARK_OUT_RANGE_M,
+                     PINCH_FINGERS, PLAN_GRASPS, PlaceOffset, SQUEEZE_RANGE_M, TIPS_HEIGHT_RANGE_M, VIA_KINDS,
+                     WAIT_RANGE_S, an_object, container_names, one_of, only_with_grasp, plan_scope)
 
 
 class ViaStop(CatalogModel):
@@ -45,7 +45,9 @@ class ViaStop(CatalogModel):
 
 class PlanStep(CatalogModel):
     """Fields every kind has: `hand`, `after` (earlier steps, by index, that end before this one starts;
-    the two hands otherwise work at once) and `wait_s` (seconds it waits after them, or after the start)."""
+    the two hands otherwise work at once), `wait_s` (seconds it waits after them, or after the start) and
+    `park_out_m` (metres outward of its home, away from the other arm, where it waits and, after its last
+    step, rests)."""
 
     keys_label: ClassVar[str] = "a field of this step kind"
     hands: ClassVar[tuple[str, ...]] = HANDS
@@ -53,6 +55,10 @@ class PlanStep(CatalogModel):
     hand: Name
     after: list[Int] = []
     wait_s: Number = Field(0.0, ge=WAIT_RANGE_S[0], le=WAIT_RANGE_S[1], description=f"seconds in [{WAIT_RANGE_S[0]:g}, {WAIT_RANGE_S[1]:g}]")
+    # metres: the hand waits for `after` (and rests after the step, if it is its last) that far outward of its
+    # home, away from the other arm's (teleop/plan_steps/park.py); default 0: at home
+    park_out_m: Number = Field(0.0, ge=PARK_OUT_RANGE_M[0], le=PARK_OUT_RANGE_M[1],
+                               description=f"metres in [{PARK_OUT_RANGE_M[0]:g}, {PARK_OUT_RANGE_M[1]:g}]")
 
     @field_validator("hand", mode="before")
     @classmethod
