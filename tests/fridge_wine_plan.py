@@ -2,9 +2,6 @@
 opens the door further and hands the bottle back round its body), planned on seed 0's scene, for the tests of
 the looks it needs."""
 
-import mujoco
-import numpy as np
-
 from sim.scene.builder import build_scene
 from sim.scene.sample import demonstration_sample, demonstration_seed
 from sim.tasks import parse_task
@@ -30,9 +27,3 @@ def planned_scene(steps: list[dict], tmp_path):
     scene = build_scene(task, EMBODIMENT, demonstration_sample(task, demonstration_seed(TASK, 0)))
     data, op = home_and_plan(scene)
     return scene, data, op
-
-
-def quat_matrix(quat) -> np.ndarray:
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, quat)
-    return R.reshape(3, 3)

@@ -64,3 +64,14 @@ def plan_steps_on(task: str, embodiment: str, steps: list[dict], seed: int = 0):
     scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), embodiment, seed)
     data, op = home_and_plan(scene)
     return op, data
+
+
+def front_slide_look(side: dict):
+    """``(look, slide, lower)``: the one upright look a front place plans outside the opening (teleop/plan_steps/
+    upright_look.py), and the slide-in and let-go keyframes that follow it."""
+    looks = [(step, fn) for step, fn in side["looks"] if fn.__qualname__.startswith("upright_look")]
+    assert len(looks) == 1, "one look, outside the opening"
+    step, look = looks[0]
+    frames = side["timeline"].frames
+    first = next(k for k, f in enumerate(frames) if f.end_step == step) + 1
+    return look, frames[first], frames[first + 1]

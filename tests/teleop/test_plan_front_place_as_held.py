@@ -10,47 +10,32 @@ import pytest
 import yaml
 
 from sim.errors import SpecError
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample
+from sim.scene.parts import quat_matrix
 from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP, axis_rotation
 from teleop.plan_steps.front_place import RELEASE_GAP_M
-from plan_runs import home_and_plan
+from plan_runs import front_slide_look, plan_steps_on
 
 TASK, EMBODIMENT, NAME = "fridge_fruit_shelf_sorting", "ur5_shadow", "banana"
 BANANA = {"hand": "right", "pick": "banana", "place": "fridge", "place_from": "front",
           "place_offset": [0.15, -0.14, 0.03], "grasp": "flat_pinch", "slide_fingers_in": True}
 
 
-def _planned(tmp_path, **fields):
-    raw = yaml.safe_load(load_task(TASK).source.read_text())
-    raw["demo_plan"] = [{**BANANA, **fields}]
-    task = parse_task(raw, tmp_path / "fridge.yaml")
-    scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
-    data, op = home_and_plan(scene)
-    return scene, data, op
+def _planned(**fields):
+    op, data = plan_steps_on(TASK, EMBODIMENT, [{**BANANA, **fields}])
+    return op.scene, data, op
 
 
-def _rot(q):
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, q)
-    return R.reshape(3, 3)
 
-
-def _look_at_a_rolled_banana(tmp_path, **fields):
+def _look_at_a_rolled_banana(**fields):
     """The plan's slide and let-go frames before and after the look outside the opening, the banana 5 mm lower
     in the hand than planned and rolled 30 degrees about its length; and where it is let go after the look."""
-    scene, data, op = _planned(tmp_path, **fields)
+    scene, data, op = _planned(**fields)
     side = op.sides["right"]
-    looks = [(step, fn) for step, fn in side["looks"] if fn.__qualname__.startswith("upright_look")]
-    assert len(looks) == 1, "one look, outside the opening"
-    step, look = looks[0]
-    frames = side["timeline"].frames
-    first = next(k for k, f in enumerate(frames) if f.end_step == step) + 1
-    slide, lower = frames[first], frames[first + 1]
+    look, slide, lower = front_slide_look(side)
     planned = [(f.pos.copy(), f.quat.copy()) for f in (slide, lower)]
     placed = next(pos for _, name, pos, on in op.moves if name == NAME and on == "fridge") + RELEASE_GAP_M * UP
-    hand_rot = _rot(slide.quat)
+    hand_rot = quat_matrix(slide.quat)
     at = hand_rot.T @ (placed - lower.pos - 0.005 * UP)            # the banana's centre, wrist frame
     body = scene.object_body_ids[NAME]
     banana = data.xmat[body].reshape(3, 3)
@@ -63,12 +48,12 @@ def _look_at_a_rolled_banana(tmp_path, **fields):
     mujoco.mju_mat2Quat(data.qpos[adr + 3:adr + 7], (wrist_rot @ in_hand).flatten())
     mujoco.mj_kinematics(scene.model, data)
     look(data)
-    let_go = lower.pos + _rot(lower.quat) @ at
+    let_go = lower.pos + quat_matrix(lower.quat) @ at
     return planned, (slide, lower), let_go, placed
 
 
-def test_as_held_the_hand_keeps_its_turn_and_the_banana_is_let_go_where_planned(tmp_path):
-    planned, looked, let_go, placed = _look_at_a_rolled_banana(tmp_path, slide_as_held=True)
+def test_as_held_the_hand_keeps_its_turn_and_the_banana_is_let_go_where_planned():
+    planned, looked, let_go, placed = _look_at_a_rolled_banana(slide_as_held=True)
     for (pos, q), frame in zip(planned, looked):
         assert np.allclose(frame.quat, q), "the hand's turn as planned"
         assert not np.allclose(frame.pos, pos), "moved for where the banana sits"
@@ -76,8 +61,8 @@ def test_as_held_the_hand_keeps_its_turn_and_the_banana_is_let_go_where_planned(
 
 
 def test_by_default_the_rolled_banana_turns_the_hand(tmp_path):
-    planned, looked, _, _ = _look_at_a_rolled_banana(tmp_path)
-    R0, R1 = _rot(planned[1][1]), _rot(looked[1].quat)
+    planned, looked, _, _ = _look_at_a_rolled_banana()
+    R0, R1 = quat_matrix(planned[1][1]), quat_matrix(looked[1].quat)
     angle = np.degrees(np.arccos(np.clip((np.trace(R0.T @ R1) - 1) / 2, -1, 1)))
     assert angle == pytest.approx(30.0, abs=1.0), "turned back by the roll"
 

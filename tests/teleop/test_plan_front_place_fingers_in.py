@@ -10,32 +10,21 @@ import pytest
 import yaml
 
 from sim.errors import SpecError
-from sim.scene.builder import build_scene
-from sim.scene.sample import demonstration_sample
+from sim.scene.parts import quat_matrix
 from sim.tasks import load_task, parse_task
 from teleop.operator_motion import UP
 from teleop.plan_steps.front_place import FINGERS, RELEASE_GAP_M
-from plan_runs import home_and_plan
+from plan_runs import plan_steps_on
 
 TASK, EMBODIMENT = "fridge_fruit_shelf_sorting", "ur5_shadow"
 BANANA = {"hand": "right", "pick": "banana", "place": "fridge", "place_from": "front",
           "place_offset": [0.15, -0.08, 0.03], "grasp": "flat_pinch"}
 
 
-def _planned(tmp_path, **fields):
-    raw = yaml.safe_load(load_task(TASK).source.read_text())
-    raw["demo_plan"] = [{**BANANA, **fields}]
-    task = parse_task(raw, tmp_path / "fridge.yaml")
-    scene = build_scene(task, EMBODIMENT, demonstration_sample(task, 0))
-    data, op = home_and_plan(scene)
-    return scene, data, op
+def _planned(**fields):
+    op, data = plan_steps_on(TASK, EMBODIMENT, [{**BANANA, **fields}])
+    return op.scene, data, op
 
-
-def _rot(q):
-    import mujoco
-    R = np.zeros(9)
-    mujoco.mju_quat2Mat(R, q)
-    return R.reshape(3, 3)
 
 
 def _slide(op):
@@ -47,24 +36,24 @@ def _slide(op):
     return frames[released - 3], frames[released - 1]
 
 
-def test_the_fingers_point_straight_in_and_the_banana_is_let_go_where_planned(tmp_path):
-    scene, data, op = _planned(tmp_path, slide_fingers_in=True)
+def test_the_fingers_point_straight_in_and_the_banana_is_let_go_where_planned():
+    scene, data, op = _planned(slide_fingers_in=True)
     fridge = scene.object_body_ids["fridge"]
     way_in = data.xmat[fridge].reshape(3, 3)[:, 1]         # the fridge is open at its -y: in is its +y
     outside, lower = _slide(op)
     for frame in (outside, lower):
-        fingers = _rot(frame.quat) @ FINGERS
+        fingers = quat_matrix(frame.quat) @ FINGERS
         level = fingers - (fingers @ UP) * UP
         assert level / np.linalg.norm(level) @ way_in == pytest.approx(1.0, abs=1e-6)
     # the banana's centre from the wrist turned with the hand: let go where planned, as without the turn
-    _, _, plain = _planned(tmp_path)
+    _, _, plain = _planned()
     placed = [next(p for _, n, p, on in o.moves if n == "banana" and on == "fridge") for o in (op, plain)]
     assert placed[0] == pytest.approx(placed[1], abs=1e-9)
     assert placed[0][2] + RELEASE_GAP_M > data.xpos[fridge][2] - 0.3, "in the fridge's lower compartment"
 
 
 def test_default_off_the_hand_keeps_the_turn_it_lifted_with(tmp_path):
-    _, _, op = _planned(tmp_path)
+    _, _, op = _planned()
     frames = op.sides["right"]["timeline"].frames
     outside, lower = _slide(op)
     lifted = frames[frames.index(outside) - 1]

@@ -6,10 +6,12 @@ hand and, set into the fridge so, leant against the back wall (not upright: the 
 import mujoco
 import numpy as np
 
+from sim.scene.parts import quat_matrix
 from teleop.operator_motion import UP, axis_rotation
 from teleop.plan_steps.front_place import RELEASE_GAP_M
 
-from fridge_wine_plan import PLAN, planned_scene, quat_matrix
+from fridge_wine_plan import PLAN, planned_scene
+from plan_runs import front_slide_look
 
 
 NAME = "wine_bottle"
@@ -18,12 +20,7 @@ NAME = "wine_bottle"
 def test_the_bottle_goes_in_upright_and_where_planned(tmp_path):
     scene, data, op = planned_scene(PLAN, tmp_path)    # up to the bottle put back through the front (held: handed back)
     side = op.sides["left"]
-    looks = [(step, fn) for step, fn in side["looks"] if fn.__qualname__.startswith("upright_look")]
-    assert len(looks) == 1, "one look, outside the opening"
-    step, look = looks[0]
-    frames = side["timeline"].frames
-    first = next(k for k, f in enumerate(frames) if f.end_step == step) + 1
-    slide, lower = frames[first], frames[first + 1]
+    look, slide, lower = front_slide_look(side)
     placed = next(pos for _, name, pos, on in op.moves if name == NAME and on == "fridge") + RELEASE_GAP_M * UP
     offset = placed - lower.pos             # the bottle's centre from the wrist as planned (world)
     # in `data`, the bottle in the left hand 5 mm lower than planned and leaning 25 degrees

@@ -7,9 +7,10 @@ fridge_wine_interhand_pour the bottle leant 3 cm off in the right hand and the t
 import mujoco
 import numpy as np
 
+from sim.scene.parts import quat_matrix
 from teleop.plan_steps.pour import aim_point, mouth_local
 
-from fridge_wine_plan import PLAN, planned_scene, quat_matrix
+from fridge_wine_plan import PLAN, planned_scene
 
 
 def test_the_tipped_mouth_is_moved_over_the_glass_by_where_it_sits_in_the_hand(tmp_path):
