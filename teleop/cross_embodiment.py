@@ -101,11 +101,11 @@ def plan_reach(task: str, embodiment: str, index: int = 0) -> dict:
         frames = side["timeline"].frames
         steps = range(0, min(frames[-2].end_step if len(frames) > 1 else 0, horizon))
 
-        def planned_by_arrival(name: str, approach: slice, frames=frames) -> np.ndarray:
+        def planned_by_arrival(name: str, approach: slice, side=side) -> np.ndarray:
             # a hand setting off for an object looks for it where the plan leaves it by the time the hand
             # gets there, not where it lay (in physics: where it is): aimed where fruit_bowl_loading's bowl lay
             # before the right hand dragged it, the UR5s' left arms "strayed" 9-27 cm, the paper's too
-            return operator.planned_place(data, name, frames[approach.stop - 1].end_step)[0]
+            return operator.planned_by_arrival(side, data, name, approach)
 
         for step in steps:
             operator.reaim(side, data, step, where=planned_by_arrival)

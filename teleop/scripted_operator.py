@@ -102,13 +102,14 @@ class ScriptedOperator:
         rest_out: dict[str, float] = {}     # per hand: its last step's park_out_m
         for item in scene.task.demo_plan:
             # `hand: both` (sim/demo_plan.py BOTH_HANDS): both timelines start together, once both are free
-            tls = [s["timeline"] for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)]
+            stepping = [s for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)]
+            tls = [s["timeline"] for s in stepping]
             wait_until = max((ends[j] for j in item.get("after", [])), default=0)
             wait_until += round(item.get("wait_s", 0.0) * CONTROL_HZ)     # opt-in: a pause after those
             if len(tls) > 1:
                 wait_until = max(wait_until, *(tl.end for tl in tls))
             out_m = item.get("park_out_m", 0.0)
-            for side in (s for n, s in self.sides.items() if item["hand"] in (n, BOTH_HANDS)):
+            for side in stepping:
                 # the hand holds still until those steps are done (opt-in: parked out of the other arm's way)
                 wait_parked(self, data, side, out_m, wait_until)
                 rest_out[side["name"]] = out_m
@@ -135,6 +136,11 @@ class ScriptedOperator:
         the last step to move it by then left it, else where it is now."""
         done = [(pos, on) for end, n, pos, on in self.moves if n == name and end <= step]
         return done[-1] if done else (self.object_pos(data, name), None)
+
+    def planned_by_arrival(self, side: dict, data: mujoco.MjData, name: str, approach: slice) -> np.ndarray:
+        """Where the plan leaves object ``name`` by the time ``side``'s approach to it (its keyframes
+        ``approach``, a look_again's) arrives: the kinematic stand-in for the look as the hand sets off."""
+        return self.planned_place(data, name, side["timeline"].frames[approach.stop - 1].end_step)[0]
 
     def set_off(self, side: dict, data: mujoco.MjData, item: dict, duration: int, pos, quat=None, hand=None,
                 carried: tuple[str, np.ndarray] | None = None, roll_first: bool = False) -> None:

@@ -60,10 +60,9 @@ def reaimed(op, data: mujoco.MjData, side: dict) -> np.ndarray:
     """Per keyframe of ``side``, how far (level) its approach to an object moves at episode time to where
     the plan leaves the object by then (as the dry run's re-aim): a pick of an object an earlier step put
     down is planned where it lay at the start."""
-    frames = side["timeline"].frames
-    moved = np.zeros((len(frames), 3))
+    moved = np.zeros((len(side["timeline"].frames), 3))
     for _, name, planned, span in side["reaims"]:
-        shift = op.planned_place(data, name, frames[span.stop - 1].end_step)[0] - planned
+        shift = op.planned_by_arrival(side, data, name, span) - planned
         shift[2] = 0.0
         moved[span] += shift
     return moved
