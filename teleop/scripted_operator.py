@@ -93,7 +93,7 @@ class ScriptedOperator:
             self.sides[side] = {"kin": kin, "arm_ids": arm_ids, "hand_ids": hand_ids, "open": open_,
                                 "closed": closed, "thin_closed": thin, "group": group, "grasp_centre": grasp.centre,
                                 "tabletop": hand.tabletop_grasp is not None, "hand": hand.name,
-                                "heavy_side_hold": hand.heavy_side_hold,
+                                "heavy_side_hold": hand.heavy_side_hold, "round_pinch": hand.round_pinch,
                                 "wrist_site_id": model.site(lay.wrist_site).id, "corrections": [], "reaims": [],
                                 "looks": [], "q": q_home.copy(), "q_home": q_home.copy(),
                                 "timeline": SideTimeline(pos0, quat0, open_, start),

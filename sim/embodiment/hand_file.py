@@ -85,6 +85,15 @@ class TabletopGrasp:
 
 
 @dataclass(frozen=True)
+class RoundPinch:
+    """A pick's `round_pinch` (a thin round object lying on the table): a flat pinch of the thumb against
+    ``fingers``, the other fingers folded ``fold`` of the way to their closed end."""
+
+    fingers: tuple[str, ...]
+    fold: float
+
+
+@dataclass(frozen=True)
 class HandDescription:
     name: str
     display_name: str
@@ -105,6 +114,7 @@ class HandDescription:
     path: Path
     real_model: Any = None         # real_model.RealModelSpec: optional real MJCF for this hand
     heavy_side_hold: str = "edge"  # a heavy object taken from the side held by its end edge, or round its body
+    round_pinch: RoundPinch | None = None   # a pick's round_pinch: this flat pinch (else the step's grasp)
 
     @property
     def joints(self) -> list[JointSpec]:
@@ -249,4 +259,6 @@ def read_hand_file(path: Path) -> HandDescription:
         contact_exclude=contact_excludes(m.contact_exclude, ctx, {link.name for link in links}),
         servo_error_at_full_effort=m.servo_error_at_full_effort,
         path=path, real_model=real_model, heavy_side_hold=m.heavy_side_hold,
+        round_pinch=None if m.round_pinch is None else RoundPinch(tuple(m.round_pinch.fingers),
+                                                                  float(m.round_pinch.fold)),
     )

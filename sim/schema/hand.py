@@ -11,6 +11,7 @@ from typing import Annotated, Literal
 from pydantic import Field
 
 from .base import CatalogModel, Name, Number, PositiveNumber, Str, Vec3, ranged
+from .demo_plan.fields import FOLD_RANGE, PINCH_FINGERS
 from .real_model import RealModel
 from .robot_parts import (SPAN_M, Angle, Frame, GeomDefaults, Joint, JointDefaults, Length, LinkPair, Mass,
                           MassProperties, Point3)
@@ -66,6 +67,15 @@ class TabletopGrasp(CatalogModel):
     thin_close: dict[str, Number] = {}      # a pick's thin_grasp: these actuators' targets instead (a thin bottle)
 
 
+class RoundPinch(CatalogModel):
+    """How the hand takes a thin round object lying on the table (a pen, a battery) where a pick asks for its
+    `round_pinch`: a flat pinch of the thumb against `fingers`, the other fingers folded `fold` of the way."""
+
+    fingers: Annotated[list[Literal[PINCH_FINGERS]], Field(min_length=1)]
+    fold: Number = Field(ge=FOLD_RANGE[0], le=FOLD_RANGE[1],
+                         description=f"a fraction in [{FOLD_RANGE[0]:g}, {FOLD_RANGE[1]:g}]")
+
+
 # MediaPipe's fingertip landmarks (sim/embodiment/retarget_spec.py)
 FINGERTIP_KEYPOINTS = ("thumb_tip", "index_tip", "middle_tip", "ring_tip", "pinky_tip")
 
@@ -105,6 +115,8 @@ class HandFile(CatalogModel):
     # how the hand carries a heavy object taken from the side (a bottle handed over): "edge", its fingers
     # hooked round the object's end edge; "body", round its body at its mass centre (a handover's body_hold)
     heavy_side_hold: Literal["edge", "body"] = "edge"
+    # a pick's `round_pinch: true` (a pen, a battery lying on the table) takes it with this flat pinch
+    round_pinch: RoundPinch | None = None
     tactile: TactileBlock
     real_model: RealModel | None = None
     retarget: Retarget | None = None

@@ -16,6 +16,11 @@ middle, place_offset dz -0.05) ends upright in the cup on 12 of 12 (8-24 degrees
 on the cup's wall). Turned more slowly (100-150 steps) it sank in the pinch and toppled over the rim on
 1-5 of 6.
 
+`place_either_end: true` lets the object stand on either end: where turning `place_axis` down would run the
+hand into its own arm at the place (kinematic check, teleop/plan_steps/own_arm.py), the other end goes down.
+On the UR5+Schunk the marker's turn put the thumb's base 4-5 cm into the forearm (the wrist stopped 10 cm
+short of the cup); its other end down keeps clear. The RM65+Revo2's keeps clear either way: unchanged.
+
 `place_tilt_deg` stops the turn that many degrees short of straight down: the object is let go leaning
 and the container's wall stands it up as it drops in. The 5 mm gray pen, flat-pinched 1.5 cm from its
 end, turns with the hand but slips out of the two tips as the turn nears vertical (at 11-18 degrees,
@@ -33,6 +38,7 @@ from sim.demo_plan import TABLE_TARGET
 from sim.embodiment.frames import quat_to_mat
 from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
 from teleop.plan_steps.operator import PlanningOperator
+from teleop.plan_steps.own_arm import OWN_ARM_DEPTH_M, into_own_arm
 from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M, RELEASE_GAP_M, lower_and_release, place_offset, planned_top
 
 DOWN = -UP
@@ -112,8 +118,21 @@ def carry_and_place_axis_down(op: PlanningOperator, data: mujoco.MjData, item: d
     release = np.array([*xy, top + at[2] + half + RELEASE_GAP_M])    # the object's centre as it is let go
     rise = max(0.0, -at[2]) + CLEAR_M       # lowered from where its lower end is CLEAR_M above the top
     q_lift = side["kin"].ik(tl.frames[-1].pos, tl.frames[-1].quat, side["q"]).q
-    down = turn_down(obj_rot @ axis, hand_rot, tilt_deg(item))
-    T = reached_turn(side, down, hand_rot, offset, release, rise, q_lift)
+
+    def turned_down(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """The turn taking ``axis`` down, the arm's turn with it, and how deep that runs the hand into its arm."""
+        down = turn_down(obj_rot @ axis, hand_rot, tilt_deg(item))
+        T = reached_turn(side, down, hand_rot, offset, release, rise, q_lift)
+        wrist, q = release - T @ offset, quat(T @ hand_rot)
+        clash = into_own_arm(op, data, side, [(wrist + rise * UP, q), (wrist, q)], q_lift) \
+            if item.get("place_either_end") else 0.0
+        return down, T, clash
+
+    down, T, clash = turned_down(axis)
+    if clash > OWN_ARM_DEPTH_M:          # place_either_end: the other end down, if that runs less into the arm
+        other = turned_down(-axis)
+        if other[2] < clash:
+            axis, (down, T, clash) = -axis, other
     yaw = T @ down.T                            # the turn about the vertical that the arm needs
     turned = T @ offset                         # the object's centre from the wrist once turned
     place = release - turned                                     # the wrist there

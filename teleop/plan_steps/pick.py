@@ -17,6 +17,17 @@ from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.pick_place import SIDE_GRASP_IN_M, carry_and_place, grasp_and_lift, side_roll
 
 
+def round_pinched(op: PlanningOperator, item: dict) -> dict:
+    """The step as planned for its hand: with `round_pinch: true`, where the hand file declares a pinch for a thin
+    round object lying on the table (`round_pinch`), a flat pinch of those fingers, the others folded that far. The
+    Schunk's own (index alone, the others folded 0.9): the folded ring finger was the hand's lowest point and held
+    the thick tips off the table; they met over a 1 cm pen, and the marker, held above its middle, slid out."""
+    declared = op.sides[item["hand"]]["round_pinch"] if item.get("round_pinch") else None
+    if declared is None:
+        return item
+    return {**item, "grasp": "flat_pinch", "pinch_fingers": list(declared.fingers), "pinch_fold": declared.fold}
+
+
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
     roll = side_roll(item)
     offset = grasp_and_lift(op, data, item, item["pick"], roll_deg=roll, side_in_m=SIDE_GRASP_IN_M if roll else 0.0)
@@ -26,6 +37,13 @@ def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
         carry_and_place_axis_down(op, data, item, item["pick"], offset)
     else:
         carry_and_place(op, data, item, item["pick"], offset)
+
+
+def as_declared(inner: Callable) -> Callable:
+    """The `pick` planner ``inner`` given the step as planned for its hand (round_pinched)."""
+    def planned(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:
+        inner(op, data, round_pinched(op, item))
+    return planned
 
 
 def returning(inner: Callable) -> Callable:

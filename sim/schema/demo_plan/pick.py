@@ -55,8 +55,12 @@ class PickStep(PlanStep, GraspFields):
     true closes a power grasp's thumb after its fingers, whatever the hand file's `late` (a small fruit pressed
     into the fingers' wall); thin_grasp: true closes a palm grasp to the hand file's targets for a thin object
     where it declares them (tabletop_grasp.thin_close: a 4 cm bottle that fingers eased for a wide jar would not
-    reach; other hands close as without it). return_home: true sends the hand back to its home pose once it has
-    let go, rather than leaving it risen over the place (where the other arm reaches in next)."""
+    reach; other hands close as without it); round_pinch: true (a pinch) takes a thin round object lying on the
+    table (a pen, a battery) with the flat pinch its hand file declares for one (`round_pinch`: the fingers and
+    how far the others fold), other hands as the step's grasp; place_either_end: true (with place_axis) turns the
+    other end down where turning place_axis down would run the hand into its own arm. return_home: true sends the
+    hand back to its home pose once it has let go, rather than leaving it risen over the place (where the other arm
+    reaches in next)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -68,6 +72,8 @@ class PickStep(PlanStep, GraspFields):
     grasp_roll_deg: RollDeg = None
     place_axis: ObjectAxis = None           # turned on the way to point straight down (teleop/plan_steps/axis_place.py)
     place_tilt_deg: Number = Field(None, ge=0.0, le=60.0, description="degrees in [0, 60]")  # place_axis turned that far short of down
+    # place_axis either end down: the other where this one turned down runs the hand into its own arm (axis_place.py)
+    place_either_end: Bool = False
     hold: Bool = False                      # kept in the hand over `place` for its next step (plan_steps/via.py)
     from_plan: Bool = False                 # grasped where an earlier step leaves it (a drag), not where it lay
     via: list[ViaStop] = Field(None, min_length=1)  # waypoints on the way to `place`
@@ -84,6 +90,9 @@ class PickStep(PlanStep, GraspFields):
     close_thumb_last: Bool = False
     # palm grasp: the hand file's targets for a thin object where it declares them (plan_steps/pick_place.py)
     thin_grasp: Bool = False
+    # pinch: the hand file's flat pinch for a thin round object lying on the table where it declares one (a pen, a
+    # battery; teleop/plan_steps/pick.py), else the step's grasp
+    round_pinch: Bool = False
     # lifted this far over the grasp and carried this far over the place (default LIFT_HEIGHT_M, 14 cm): a lower
     # carry, less swing for a piece held by its edges (teleop/plan_steps/pick_place.py)
     lift_m: Number = Field(None, ge=LIFT_RANGE_M[0], le=LIFT_RANGE_M[1],
@@ -147,6 +156,8 @@ class PickStep(PlanStep, GraspFields):
         only_with_grasp("power", "the order a palm grasp closes in"))
     _palm_only = field_validator("thin_grasp", mode="before")(
         only_with_grasp(("power", SIDE_GRASP), "how far a palm grasp closes"))
+    _pinch_only = field_validator("round_pinch", mode="before")(
+        only_with_grasp(("pinch", "flat_pinch"), "the hand's pinch for a thin round object"))
     _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", "place_yaw",
                                        "ease_turned", mode="before")(
         only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
@@ -179,6 +190,13 @@ class PickStep(PlanStep, GraspFields):
         if info.data.get("place_axis") is None:
             raise ValueError("no place_tilt_deg without place_axis (the axis it leaves leaning)")
         return tilt
+
+    @field_validator("place_either_end", mode="before")
+    @classmethod
+    def _either_end_of_place_axis(cls, either, info: ValidationInfo):
+        if info.data.get("place_axis") is None:
+            raise ValueError("no place_either_end without place_axis (the axis whose ends it chooses between)")
+        return either
 
     @field_validator("place_axis", mode="before")
     @classmethod

@@ -1,0 +1,32 @@
+"""How far a planned wrist pose runs a hand into its own arm, which the arm's IK does not see: turned to stand
+a marker up in the pen cup, the Schunk's thumb base went 4-5 cm into the UR5's forearm
+(stationery_category_sorting), and in physics the wrist stopped 10 cm short of the cup."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+# deeper than this a planned pose runs the hand into its own arm (the RM65+Revo2's poses standing the marker up: none)
+OWN_ARM_DEPTH_M = 0.005
+
+
+def into_own_arm(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarray) -> float:
+    """How deep (metres) ``side``'s hand goes into its own arm at the wrist poses ``poses`` ((pos, quat) each, the
+    arm's IK warm-started along them from ``q_seed``), the rest of the scene as in ``data``."""
+    model, lay = op.scene.model, op.scene.layout.sides[side["name"]]
+    hand = {model.body(b).id for b in lay.hand_bodies}
+    arm = {model.body(b).id for b in lay.arm_bodies}
+    joints = [model.joint(j).qposadr[0] for j in lay.arm_joints]
+    probe = mujoco.MjData(model)
+    q, deepest = q_seed, 0.0
+    for pos, quat in poses:
+        q = side["kin"].ik(pos, quat, q).q
+        probe.qpos[:] = data.qpos
+        probe.qpos[joints] = q
+        mujoco.mj_forward(model, probe)
+        for c in probe.contact[:probe.ncon]:
+            a, b = model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]
+            if a in hand and b in arm or b in hand and a in arm:
+                deepest = max(deepest, -float(c.dist))
+    return deepest
