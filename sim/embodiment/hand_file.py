@@ -87,10 +87,10 @@ class TabletopGrasp:
 @dataclass(frozen=True)
 class RoundPinch:
     """A pick's `round_pinch` (a thin round object lying on the table): a flat pinch of the thumb against
-    ``fingers``, the other fingers folded ``fold`` of the way to their closed end."""
+    ``fingers``, the other fingers folded ``fold`` of the way to their closed end (None: the hand's own)."""
 
-    fingers: tuple[str, ...]
-    fold: float
+    fingers: tuple[str, ...] | None = None
+    fold: float | None = None
 
 
 @dataclass(frozen=True)
@@ -259,6 +259,7 @@ def read_hand_file(path: Path) -> HandDescription:
         contact_exclude=contact_excludes(m.contact_exclude, ctx, {link.name for link in links}),
         servo_error_at_full_effort=m.servo_error_at_full_effort,
         path=path, real_model=real_model, heavy_side_hold=m.heavy_side_hold,
-        round_pinch=None if m.round_pinch is None else RoundPinch(tuple(m.round_pinch.fingers),
-                                                                  float(m.round_pinch.fold)),
+        round_pinch=None if m.round_pinch is None else RoundPinch(
+            None if m.round_pinch.fingers is None else tuple(m.round_pinch.fingers),
+            None if m.round_pinch.fold is None else float(m.round_pinch.fold)),
     )

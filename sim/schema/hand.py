@@ -69,10 +69,11 @@ class TabletopGrasp(CatalogModel):
 
 class RoundPinch(CatalogModel):
     """How the hand takes a thin round object lying on the table (a pen, a battery) where a pick asks for its
-    `round_pinch`: a flat pinch of the thumb against `fingers`, the other fingers folded `fold` of the way."""
+    `round_pinch`: a flat pinch of the thumb against `fingers`, the other fingers folded `fold` of the way
+    (either left out: the hand's own flat pinch's; `{}` is the flat pinch as the hand makes it)."""
 
-    fingers: Annotated[list[Literal[PINCH_FINGERS]], Field(min_length=1)]
-    fold: Number = Field(ge=FOLD_RANGE[0], le=FOLD_RANGE[1],
+    fingers: Annotated[list[Literal[PINCH_FINGERS]], Field(min_length=1)] = None
+    fold: Number = Field(None, ge=FOLD_RANGE[0], le=FOLD_RANGE[1],
                          description=f"a fraction in [{FOLD_RANGE[0]:g}, {FOLD_RANGE[1]:g}]")
 
 

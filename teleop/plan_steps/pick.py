@@ -25,7 +25,12 @@ def round_pinched(op: PlanningOperator, item: dict) -> dict:
     declared = op.sides[item["hand"]]["round_pinch"] if item.get("round_pinch") else None
     if declared is None:
         return item
-    return {**item, "grasp": "flat_pinch", "pinch_fingers": list(declared.fingers), "pinch_fold": declared.fold}
+    step = {**item, "grasp": "flat_pinch"}
+    if declared.fingers is not None:
+        step["pinch_fingers"] = list(declared.fingers)
+    if declared.fold is not None:
+        step["pinch_fold"] = declared.fold
+    return step
 
 
 def plan(op: PlanningOperator, data: mujoco.MjData, item: dict) -> None:

@@ -61,3 +61,17 @@ def test_the_schunk_takes_it_with_its_declared_flat_pinch():
 def test_a_hand_without_a_round_pinch_plans_the_step_as_written():
     assert load_embodiment("rm65_revo2").hand.round_pinch is None
     assert _frames("rm65_revo2", {**BATTERY, "round_pinch": True}) == _frames("rm65_revo2", BATTERY)
+
+
+def test_a_declaration_left_empty_is_the_hands_own_flat_pinch():
+    """`round_pinch: {}`: the step as a flat pinch with the hand's own fingers and fold (no pinch_fingers or
+    pinch_fold added), for a hand whose flat pinch lifts what its pad pinch does not."""
+    from sim.embodiment.hand_file import RoundPinch as Declared
+    from teleop.plan_steps.pick import round_pinched
+
+    assert RoundPinch().fingers is None and RoundPinch().fold is None
+
+    class Operator:
+        sides = {"right": {"round_pinch": Declared()}}
+    assert round_pinched(Operator(), {**BATTERY, "round_pinch": True}) == {**BATTERY, "round_pinch": True,
+                                                                           "grasp": "flat_pinch"}
