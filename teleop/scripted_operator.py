@@ -17,7 +17,7 @@ from typing import Callable
 import mujoco
 import numpy as np
 
-from sim.demo_plan import BOTH_HANDS, step_kind
+from sim.demo_plan import BOTH_HANDS
 from sim.physics import CONTROL_HZ
 from sim.embodiment.description import HandDescription, TabletopGrasp, load_embodiment
 from sim.embodiment.frames import quat_to_mat
@@ -25,7 +25,7 @@ from sim.embodiment.mirror import mirror_vec
 from sim.scene.builder import Scene
 from teleop.operator_motion import (DURATIONS, NOT_IN_HAND_M, SideTimeline, axis_rotation, roll_then_swing,
                                     quat as motion_quat)
-from teleop.plan_steps import PLANNERS
+from teleop.plan_steps.fallback import plan_step
 from teleop.plan_steps.park import rest_pos, wait_parked
 from teleop.transit import hand_outline, bounding_box_points, obstacles, transit_height
 
@@ -113,7 +113,7 @@ class ScriptedOperator:
                 # the hand holds still until those steps are done (opt-in: parked out of the other arm's way)
                 wait_parked(self, data, side, out_m, wait_until)
                 rest_out[side["name"]] = out_m
-            PLANNERS[step_kind(item)](self, data, item)
+            plan_step(self, data, item)      # its kind's planner (a pick's fallback, lying_pinch: fallback.py)
             ends.append(max(tl.end for tl in tls))
             self.moves += [(ends[-1], *left) for left in self._leaving]
             self._leaving = []

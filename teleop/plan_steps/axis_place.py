@@ -36,7 +36,7 @@ import numpy as np
 
 from sim.demo_plan import TABLE_TARGET
 from sim.embodiment.frames import quat_to_mat
-from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat
+from teleop.operator_motion import DURATIONS, NOT_IN_HAND_M, UP, SideTimeline, axis_rotation, quat, slerp
 from teleop.plan_steps.operator import PlanningOperator
 from teleop.plan_steps.own_arm import OWN_ARM_DEPTH_M, into_own_arm
 from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M, RELEASE_GAP_M, lower_and_release, place_offset, planned_top
@@ -44,6 +44,7 @@ from teleop.plan_steps.pick_place import CARRY_CLEARANCE_M, RELEASE_GAP_M, lower
 DOWN = -UP
 CLEAR_M = 0.03          # turned and above its place, the object's lower end this far above the target's top
 YAW_STEP_DEG = 15.0     # turns about the vertical tried for a hand pose the arm reaches
+MARGIN_POINTS = (24, 5)     # turn_margin: the carry and the lowering, checked at this many poses each
 
 
 def turn_down(direction: np.ndarray, hand_rot: np.ndarray, short_deg: float = 0.0) -> np.ndarray:
@@ -81,6 +82,25 @@ def reached_turn(side: dict, T: np.ndarray, hand_rot: np.ndarray, offset: np.nda
         if best is None or miss < best[0]:
             best = (miss, turn)
     return best[1]
+
+
+def turn_margin(side: dict, turn: np.ndarray, hand_rot: np.ndarray, offset: np.ndarray, release: np.ndarray,
+                rise: float, q_seed: np.ndarray) -> float:
+    """How near (rad) an arm joint comes to its limit as the arm, from ``q_seed`` (lifted), carries the object
+    turned ``turn`` above its release and lowers it there (the IK warm-started along the way): a pick's
+    `fallback` (teleop/plan_steps/fallback.py) takes over where a turn leaves no room for the look's correction."""
+    kin = side["kin"]
+    start, start_quat = kin.fk(q_seed)
+    place = release - turn @ offset
+    above, turned = place + rise * UP, quat(turn @ hand_rot)
+    carry, lower = MARGIN_POINTS
+    poses = [(start + s * (above - start), slerp(start_quat, turned, s)) for s in np.linspace(0.0, 1.0, carry + 1)]
+    poses += [(above + s * (place - above), turned) for s in np.linspace(0.0, 1.0, lower + 1)[1:]]
+    q, margin = np.asarray(q_seed, float), np.inf
+    for pos, q_wxyz in poses:
+        q = kin.ik(pos, q_wxyz, q, max_iters=30).q
+        margin = min(margin, float(np.min(np.minimum(q - kin.lower, kin.upper - q))))
+    return margin
 
 
 def tilt_deg(item: dict) -> float:
@@ -133,6 +153,8 @@ def carry_and_place_axis_down(op: PlanningOperator, data: mujoco.MjData, item: d
         other = turned_down(-axis)
         if other[2] < clash:
             axis, (down, T, clash) = -axis, other
+    if item.get("fallback"):        # how near the turn comes to a joint limit, for the step's fallback check
+        side["turn_margin"] = turn_margin(side, T, hand_rot, offset, release, rise, q_lift)
     yaw = T @ down.T                            # the turn about the vertical that the arm needs
     turned = T @ offset                         # the object's centre from the wrist once turned
     place = release - turned                                     # the wrist there

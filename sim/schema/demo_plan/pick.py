@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import math
-from typing import ClassVar
+from typing import Any, ClassVar
 
-from pydantic import Field, ValidationInfo, field_validator, model_validator
+from pydantic import Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from ..base import Bool, Int, Name, Number, is_number
 from .fields import (CARRY_RANGE_S, GRASP_YAW_ACROSS, LIFT_RANGE_M, OPEN_RANGE_S, ObjectAxis, ObjectPoint,
@@ -13,6 +13,10 @@ from .fields import (CARRY_RANGE_S, GRASP_YAW_ACROSS, LIFT_RANGE_M, OPEN_RANGE_S
                      SlideClearance, TABLE_TARGET, TaskObject, VIA_TIMES_RANGE, an_object, front_container,
                      only_with_grasp, side_grasp_roll, slid_in)
 from .step import GraspFields, PlanStep, ViaStop
+
+
+# what a pick's fallback may not change: what the step is (the hand, the object, its order in the plan)
+FALLBACK_FIXED = frozenset({"hand", "pick", "after", "wait_s", "fallback"})
 
 
 class PickStep(PlanStep, GraspFields):
@@ -60,7 +64,11 @@ class PickStep(PlanStep, GraspFields):
     how far the others fold), other hands as the step's grasp; place_either_end: true (with place_axis) turns the
     other end down where turning place_axis down would run the hand into its own arm. return_home: true sends the
     hand back to its home pose once it has let go, rather than leaving it risen over the place (where the other arm
-    reaches in next)."""
+    reaches in next).
+    fallback {field: value, ...} is the step done another way where the arm cannot do it as written
+    (teleop/plan_steps/fallback.py): its IK, tracked along the step's planned wrist path, strays more than 10 cm
+    from it (another branch), or a `place_axis` turn leaves an arm joint within 0.2 rad of its limit; those fields
+    then replace the step's own (e.g. the other end down and a palm grasp)."""
 
     grasps: ClassVar[tuple[str, ...]] = PICK_GRASPS
     part_pinch: ClassVar[bool] = True
@@ -111,6 +119,24 @@ class PickStep(PlanStep, GraspFields):
     grasp_yaw_object: Bool = False
     # after letting go the hand goes back to its home pose, out of the other arm's way (teleop/plan_steps/pick.py)
     return_home: Bool = False
+    # the step's fields done another way where the arm cannot do it as written (teleop/plan_steps/fallback.py)
+    fallback: dict[str, Any] = None
+
+    @model_validator(mode="after")
+    def _fallback_a_pick(self, info: ValidationInfo):
+        """`fallback` replaces some of the step's fields: the step with them must be a pick step too."""
+        if self.fallback is None:
+            return self
+        fixed = sorted(FALLBACK_FIXED & set(self.fallback))
+        if not self.fallback or fixed:
+            raise ValueError(f"fallback: a non-empty mapping of pick fields other than {sorted(FALLBACK_FIXED)}")
+        own = {k: getattr(self, k) for k in self.model_fields_set if k != "fallback"}
+        try:
+            type(self).model_validate({**own, **self.fallback}, context=info.context)
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise ValueError(f"fallback: {'.'.join(map(str, first['loc']))}: {first['msg']}") from None
+        return self
 
     @field_validator("return_home", mode="before")
     @classmethod
