@@ -210,19 +210,13 @@ class PickStep(PlanStep, GraspFields):
             raise ValueError(f"no place_yaw with place: {TABLE_TARGET} (set down as it is held, not squared to anything)")
         return yaw
 
-    @field_validator("place_tilt_deg", mode="before")
+    @field_validator("place_tilt_deg", "place_either_end", mode="before")
     @classmethod
-    def _with_place_axis(cls, tilt, info: ValidationInfo):
+    def _with_place_axis(cls, value, info: ValidationInfo):
+        what = {"place_tilt_deg": "the axis it leaves leaning", "place_either_end": "the axis whose ends it chooses between"}
         if info.data.get("place_axis") is None:
-            raise ValueError("no place_tilt_deg without place_axis (the axis it leaves leaning)")
-        return tilt
-
-    @field_validator("place_either_end", mode="before")
-    @classmethod
-    def _either_end_of_place_axis(cls, either, info: ValidationInfo):
-        if info.data.get("place_axis") is None:
-            raise ValueError("no place_either_end without place_axis (the axis whose ends it chooses between)")
-        return either
+            raise ValueError(f"no {info.field_name} without place_axis ({what[info.field_name]})")
+        return value
 
     @field_validator("place_axis", mode="before")
     @classmethod
