@@ -33,6 +33,10 @@ FD_STEP = 1e-5                 # rad: finite-difference step of the tips' Jacobi
 PITCHES_DEG = np.arange(-30.0, 91.0, 5.0)     # fingers from 30 degrees up to straight down
 ROLLS_DEG = np.arange(-60.0, 61.0, 5.0)        # turned about the fingers
 BASE_CLEARANCE_M = 0.08     # the arm's flange (the hand's base) kept this high over the tips: off the table
+# grasp_arm_clear: other turns whose highest tip is at most this much higher than the best's (the RH5DG2's [index,
+# middle] pinch: rolls -15, -20, -30, -35 degrees within 0.6 mm; within 1 mm none kept the UR5's left arm off the pen
+# cup taking the pen on seed 3)
+NEAR_ROTATION_M = 0.003
 
 
 @dataclass(frozen=True)
@@ -177,6 +181,33 @@ def _flat_pinch_rotation(hand_name: str, side: str, ready: tuple, fingers: tuple
                 best, best_cost = R, cost
     best.flags.writeable = False
     return best
+
+
+@functools.lru_cache(maxsize=None)
+def near_rotations(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None) -> tuple[np.ndarray, ...]:
+    """flat_pinch_rotation's rotation first, then the other pitches and rolls whose highest tip is within
+    NEAR_ROTATION_M of its, nearest first: a flat pinch as good, with the arm turned another way (`grasp_arm_clear`)."""
+    q = np.array(ready)
+    best = _flat_pinch_rotation(hand_name, side, ready, fingers)
+    tips = tip_points(hand_name, tip_pinch(hand_name, fingers).fingers, q)
+    tips = tips @ M if side == "left" else tips
+    outline = hand_outline(hand_name, side, q)
+    base = hand_kinematics(hand_name).hand.wrist_site.to_local(np.zeros(3))
+    base = base @ M if side == "left" else base
+    scored = []
+    for pitch in PITCHES_DEG:
+        for roll in ROLLS_DEG:
+            R = _turned(pitch, roll)
+            low = (outline @ R.T)[:, 2].min()
+            cost = (tips @ R.T)[:, 2].max() - low + max(0.0, BASE_CLEARANCE_M - ((R @ base)[2] - low))
+            scored.append((cost, R))
+    least = min(cost for cost, _ in scored)
+    near = sorted(((c, R) for c, R in scored if c <= least + NEAR_ROTATION_M and not np.allclose(R, best)),
+                  key=lambda cR: cR[0])
+    out = (best, *(R for _, R in near))
+    for R in out:
+        R.flags.writeable = False
+    return out
 
 
 def width_along(model: mujoco.MjModel, data: mujoco.MjData, body: int, axis: np.ndarray,

@@ -2,6 +2,8 @@
 
 import dataclasses
 
+import numpy as np
+
 from sim import physics
 from sim.demo_plan import PlanScope, parse_plan
 from sim.scene.builder import demonstration_scene
@@ -64,6 +66,13 @@ def plan_steps_on(task: str, embodiment: str, steps: list[dict], seed: int = 0):
     scene = demonstration_scene(dataclasses.replace(spec, demo_plan=plan), embodiment, seed)
     data, op = home_and_plan(scene)
     return op, data
+
+
+def timeline_rows(side: dict) -> list[tuple]:
+    """A side's planned keyframes as comparable rows (end step, wrist position and quaternion, hand targets),
+    rounded to 1e-9: two plans are the same plan when their rows are equal."""
+    return [(f.end_step, *np.round(f.pos, 9), *np.round(f.quat, 9), *np.round(f.hand, 9))
+            for f in side["timeline"].frames]
 
 
 def front_slide_look(side: dict):

@@ -91,6 +91,7 @@ class RoundPinch:
 
     fingers: tuple[str, ...] | None = None
     fold: float | None = None
+    tips_height_m: float | None = None     # the closed tips this high over the object's bottom (None: pressed down)
 
 
 @dataclass(frozen=True)
@@ -261,5 +262,6 @@ def read_hand_file(path: Path) -> HandDescription:
         path=path, real_model=real_model, heavy_side_hold=m.heavy_side_hold,
         round_pinch=None if m.round_pinch is None else RoundPinch(
             None if m.round_pinch.fingers is None else tuple(m.round_pinch.fingers),
-            None if m.round_pinch.fold is None else float(m.round_pinch.fold)),
+            None if m.round_pinch.fold is None else float(m.round_pinch.fold),
+            None if m.round_pinch.tips_height_m is None else float(m.round_pinch.tips_height_m)),
     )

@@ -11,7 +11,7 @@ from typing import Annotated, Literal
 from pydantic import Field
 
 from .base import CatalogModel, Name, Number, PositiveNumber, Str, Vec3, ranged
-from .demo_plan.fields import FOLD_RANGE, PINCH_FINGERS
+from .demo_plan.fields import FOLD_RANGE, PINCH_FINGERS, TIPS_HEIGHT_RANGE_M
 from .real_model import RealModel
 from .robot_parts import (SPAN_M, Angle, Frame, GeomDefaults, Joint, JointDefaults, Length, LinkPair, Mass,
                           MassProperties, Point3)
@@ -70,11 +70,15 @@ class TabletopGrasp(CatalogModel):
 class RoundPinch(CatalogModel):
     """How the hand takes a thin round object lying on the table (a pen, a battery) where a pick asks for its
     `round_pinch`: a flat pinch of the thumb against `fingers`, the other fingers folded `fold` of the way
-    (either left out: the hand's own flat pinch's; `{}` is the flat pinch as the hand makes it)."""
+    (either left out: the hand's own flat pinch's; `{}` is the flat pinch as the hand makes it), and with
+    `tips_height_m` its closed tips that high over the object's bottom rather than pressed onto the table."""
 
     fingers: Annotated[list[Literal[PINCH_FINGERS]], Field(min_length=1)] = None
     fold: Number = Field(None, ge=FOLD_RANGE[0], le=FOLD_RANGE[1],
                          description=f"a fraction in [{FOLD_RANGE[0]:g}, {FOLD_RANGE[1]:g}]")
+    # the closed tips this high over the object's bottom (a step's grasp_tips_height_m), not pressed into the table
+    tips_height_m: Number = Field(None, ge=TIPS_HEIGHT_RANGE_M[0], le=TIPS_HEIGHT_RANGE_M[1],
+                                  description=f"metres in [{TIPS_HEIGHT_RANGE_M[0]:g}, {TIPS_HEIGHT_RANGE_M[1]:g}]")
 
 
 # MediaPipe's fingertip landmarks (sim/embodiment/retarget_spec.py)

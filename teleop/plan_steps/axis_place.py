@@ -45,6 +45,7 @@ DOWN = -UP
 CLEAR_M = 0.03          # turned and above its place, the object's lower end this far above the target's top
 YAW_STEP_DEG = 15.0     # turns about the vertical tried for a hand pose the arm reaches
 MARGIN_POINTS = (24, 5)     # turn_margin: the carry and the lowering, checked at this many poses each
+FULL_TURN_SLACK_RAD = 0.01   # turn_margin: a joint range this much over a full turn counts as more than one
 
 
 def turn_down(direction: np.ndarray, hand_rot: np.ndarray, short_deg: float = 0.0) -> np.ndarray:
@@ -96,10 +97,14 @@ def turn_margin(side: dict, turn: np.ndarray, hand_rot: np.ndarray, offset: np.n
     carry, lower = MARGIN_POINTS
     poses = [(start + s * (above - start), slerp(start_quat, turned, s)) for s in np.linspace(0.0, 1.0, carry + 1)]
     poses += [(above + s * (place - above), turned) for s in np.linspace(0.0, 1.0, lower + 1)[1:]]
+    # a joint that turns more than a full turn (the UR5's wrists, +-2 pi) is not cornered at a limit: the same pose
+    # lies a turn back (counted, the UR5's marker turn fell back on every seed and lost the RH5DG2 two of three)
+    bounded = kin.upper - kin.lower <= 2 * np.pi + FULL_TURN_SLACK_RAD
     q, margin = np.asarray(q_seed, float), np.inf
     for pos, q_wxyz in poses:
         q = kin.ik(pos, q_wxyz, q, max_iters=30).q
-        margin = min(margin, float(np.min(np.minimum(q - kin.lower, kin.upper - q))))
+        room = np.minimum(q - kin.lower, kin.upper - q)[bounded]
+        margin = min(margin, float(np.min(room, initial=np.inf)))
     return margin
 
 

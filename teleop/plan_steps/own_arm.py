@@ -17,6 +17,22 @@ def into_own_arm(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarray)
     model, lay = op.scene.model, op.scene.layout.sides[side["name"]]
     hand = {model.body(b).id for b in lay.hand_bodies}
     arm = {model.body(b).id for b in lay.arm_bodies}
+    return _deepest(op, data, side, poses, q_seed, hand, arm)
+
+
+def arm_into_scene(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarray) -> float:
+    """How deep (metres) ``side``'s arm (not its hand) goes into anything not a robot (the objects, the table) at the
+    wrist poses ``poses``, as into_own_arm: taking the RH5DG2's pinch, the UR5's wrist_1 link pressed on the pen cup's
+    rim 25 cm from the hand (stationery_category_sorting) and held the tips over the marker."""
+    model, layout = op.scene.model, op.scene.layout
+    arm = {model.body(b).id for b in layout.sides[side["name"]].arm_bodies}
+    robots = {model.body(b).id for lay in layout.sides.values() for b in (*lay.arm_bodies, *lay.hand_bodies)}
+    return _deepest(op, data, side, poses, q_seed, arm, set(range(model.nbody)) - robots)
+
+
+def _deepest(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarray, these: set, those: set) -> float:
+    """The deepest contact between bodies ``these`` and ``those`` with ``side``'s arm at each of ``poses``."""
+    model, lay = op.scene.model, op.scene.layout.sides[side["name"]]
     joints = [model.joint(j).qposadr[0] for j in lay.arm_joints]
     probe = mujoco.MjData(model)
     q, deepest = q_seed, 0.0
@@ -27,6 +43,6 @@ def into_own_arm(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarray)
         mujoco.mj_forward(model, probe)
         for c in probe.contact[:probe.ncon]:
             a, b = model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]
-            if a in hand and b in arm or b in hand and a in arm:
+            if a in these and b in those or b in these and a in those:
                 deepest = max(deepest, -float(c.dist))
     return deepest

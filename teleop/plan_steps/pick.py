@@ -30,6 +30,8 @@ def round_pinched(op: PlanningOperator, item: dict) -> dict:
         step["pinch_fingers"] = list(declared.fingers)
     if declared.fold is not None:
         step["pinch_fold"] = declared.fold
+    if declared.tips_height_m is not None:
+        step["grasp_tips_height_m"] = declared.tips_height_m
     return step
 
 

@@ -21,8 +21,8 @@ from sim.demo_plan import GRASP_YAW_ACROSS, SIDE_GRASP, TABLE_TARGET
 from sim.embodiment.mirror import mirror_vec
 from sim.physics import CONTROL_HZ
 from sim.scene.reach import PALM_DOWN
-from teleop.flat_pinch import (flat_pinch_rotation, refolded, tip_axis, tip_pinch, tip_preshape, tips_over_lowest,
-                                width_along)
+from teleop.flat_pinch import (flat_pinch_rotation, near_rotations, refolded, tip_axis, tip_pinch, tip_preshape,
+                                tips_over_lowest, width_along)
 from teleop.operator_motion import (APPROACH_HEIGHT_M, DURATIONS, FORWARD, LIFT_HEIGHT_M, UP, SideTimeline,
                                     axis_rotation, pitched_palm_down, quat, yaw_of, yawed)
 from teleop.pinch_grasp import pinch_axis_in_site_frame, pinch_fingers, pinch_grasp, pinch_preshape, thumb_actuators
@@ -30,6 +30,7 @@ from teleop.pinch_squeeze import squeezed
 from teleop.pinch_tips import tips_clear_preshape
 from teleop.plan_steps.flat_place import flat_place
 from teleop.plan_steps.operator import PlanningOperator
+from teleop.plan_steps.own_arm import OWN_ARM_DEPTH_M, arm_into_scene
 from teleop.plan_steps.part_pinch import part_width
 from teleop.transit import bounding_box_points, hand_outline
 
@@ -90,7 +91,47 @@ FLAT_PINCH_PRESS_M = 0.008
 FLAT_PINCH_STAGES = 4     # flat pinch: closing in this many stages, the wrist following the lowest point down
 
 
+# grasp_arm_clear: another turn of the hand only with every arm joint within this of the planned grasp's (the
+# RH5DG2's clear turns: 0.2-0.45 rad away; a wrist flipped to the other branch: 3.3-4.1)
+SAME_BRANCH_RAD = 1.0
+
+
 def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str):
+    """`grasp: flat_pinch` (flat_pinch_turned); with `grasp_arm_clear: true`, where the arm at the closed grasp
+    runs more than OWN_ARM_DEPTH_M into the scene (an object, the table), the first of the other near-best turns of
+    the hand (flat_pinch.near_rotations) whose arm touches none of it, if any: taking the marker with the RH5DG2's
+    pinch, the UR5's wrist_1 link 25 cm back from the hand pressed on the pen cup's rim (150-200 N) and held the tips
+    over the marker; the hand rolled 15-20 degrees further about its fingers keeps it clear."""
+    planned = flat_pinch_turned(op, data, item, name)
+    if not item.get("grasp_arm_clear"):
+        return planned
+    side = op.sides[item["hand"]]
+    here = op.planned_place(data, name, side["timeline"].end)[0] if item.get("from_plan") else op.object_pos(data, name)
+
+    def reached(pinch) -> tuple[float, np.ndarray]:
+        """How deep the arm goes into the scene at the pinch's closed grasp, and its joints there."""
+        hand_rot, _, offset, closing = pinch
+        pose = (np.array([*(here - offset)[:2], closing[-1][2]]), quat(hand_rot))
+        return arm_into_scene(op, data, side, [pose], side["q"]), side["kin"].ik(*pose, side["q"]).q
+
+    depth, q = reached(planned)
+    if depth <= OWN_ARM_DEPTH_M:
+        return planned
+    choice = 1
+    while True:
+        try:
+            other = flat_pinch_turned(op, data, item, name, choice)
+        except IndexError:          # none of them keeps clear: as planned
+            return planned
+        depth, q_other = reached(other)
+        # clear, not grazing (3-4 mm deep in the check, the UR5 pressed on the cup at 45-64 N), and the arm's joints
+        # near the planned ones: another wrist branch (3.3-3.5 rad away, the UR5+Wuji's pen) the arm strays to reach
+        if depth == 0.0 and np.max(np.abs(q_other - q)) <= SAME_BRANCH_RAD:
+            return other
+        choice += 1
+
+
+def flat_pinch_turned(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str, choice: int = 0):
     """`grasp: flat_pinch` (teleop/flat_pinch.py): the hand turned so that the thumb's and the
     fingers' tips are its lowest points, yawed (`grasp_yaw`) and spread across the object, comes down
     until its lowest point presses onto the table beside the object, then closes in stages, the wrist
@@ -111,8 +152,12 @@ def flat_pinch(op: PlanningOperator, data: mujoco.MjData, item: dict, name: str)
     mirror = mirror_vec if left else (lambda v: v)
 
     def turned(q_turn: np.ndarray, q_axis: np.ndarray) -> np.ndarray:
-        """Tips at the bottom for shape ``q_turn``; yawed by the tips' axis at ``q_axis``."""
-        R = flat_pinch_rotation(hand, item["hand"], q_turn, fingers)
+        """Tips at the bottom for shape ``q_turn`` (``choice``: the near-best turn that many from the best); yawed by
+        the tips' axis at ``q_axis``."""
+        if choice:        # IndexError past the last
+            R = near_rotations(hand, item["hand"], tuple(np.round(q_turn, 6)), fingers)[choice]
+        else:
+            R = flat_pinch_rotation(hand, item["hand"], q_turn, fingers)
         closing = R @ mirror(tip_axis(hand, q_axis, fingers))
         if item.get("grasp_yaw", GRASP_YAW_ACROSS) == GRASP_YAW_ACROSS:
             return yawed(R, across_turn(closing, body_rot, obj.half_extents))

@@ -4,18 +4,11 @@ Standing the marker up in the pen cup (stationery_category_sorting), the UR5+Sch
 its forearm with the marker's +x end down, and clears with -x down; the RM65+Revo2 clears either way, so its
 timeline does not change. The check refuses it without place_axis."""
 
-import dataclasses
-
-import numpy as np
 import pytest
 
-from sim.demo_plan import PlanScope, parse_plan
 from sim.errors import SpecError
-from sim.scene.builder import demonstration_scene
-from sim.tasks import load_task
+from plan_runs import parse_steps, plan_steps_on, timeline_rows
 from teleop.plan_steps.own_arm import OWN_ARM_DEPTH_M, into_own_arm
-from teleop.recorder import home
-from teleop.scripted_operator import ScriptedOperator
 
 TASK = "stationery_category_sorting"
 MARKER = {"hand": "right", "pick": "marker", "place": "pen_cup", "place_offset": [0.0, 0.0, -0.05],
@@ -23,22 +16,15 @@ MARKER = {"hand": "right", "pick": "marker", "place": "pen_cup", "place_offset":
 
 
 def _plan(steps):
-    task = load_task(TASK)
-    return parse_plan("t.yaml", {"demo_plan": steps}, PlanScope(task.objects, task.zones, task.points))
+    return parse_steps(TASK, steps)[1]
 
 
 def _planned(embodiment: str, step: dict):
-    scene = demonstration_scene(TASK, embodiment, 0)
-    scene.task = dataclasses.replace(scene.task, demo_plan=_plan([step]))     # not load_task's cached one
-    data = home(scene)
-    op = ScriptedOperator()
-    op.reset(scene, data)
-    return op, data
+    return plan_steps_on(TASK, embodiment, [step], 0)
 
 
 def _frames(op) -> list[tuple]:
-    return [(f.end_step, *np.round(f.pos, 9), *np.round(f.quat, 9), *np.round(f.hand, 9))
-            for f in op.sides["right"]["timeline"].frames]
+    return timeline_rows(op.sides["right"])
 
 
 def test_check_refuses_either_end_without_place_axis():

@@ -75,3 +75,14 @@ def test_a_declaration_left_empty_is_the_hands_own_flat_pinch():
         sides = {"right": {"round_pinch": Declared()}}
     assert round_pinched(Operator(), {**BATTERY, "round_pinch": True}) == {**BATTERY, "round_pinch": True,
                                                                            "grasp": "flat_pinch"}
+
+
+def test_a_declared_tips_height_closes_the_tips_that_high():
+    """The RH5DG2 declares its round pinch's tips 6 mm over the object's bottom (its linkage index, pressed onto the
+    table with the default, stuck there): the step as a flat pinch with that grasp_tips_height_m."""
+    declared = load_embodiment("ur5_rh5dg2").hand.round_pinch
+    assert declared.fingers == ("index", "middle") and declared.fold is None and declared.tips_height_m == 0.006
+    flat = {**BATTERY, "grasp": "flat_pinch", "pinch_fingers": ["index", "middle"], "grasp_tips_height_m": 0.006}
+    assert _frames("ur5_rh5dg2", {**BATTERY, "round_pinch": True}) == _frames("ur5_rh5dg2", flat)
+    with pytest.raises(ValueError):
+        RoundPinch(tips_height_m=0.05)

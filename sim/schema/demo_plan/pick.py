@@ -60,11 +60,12 @@ class PickStep(PlanStep, GraspFields):
     into the fingers' wall); thin_grasp: true closes a palm grasp to the hand file's targets for a thin object
     where it declares them (tabletop_grasp.thin_close: a 4 cm bottle that fingers eased for a wide jar would not
     reach; other hands close as without it); round_pinch: true (a pinch) takes a thin round object lying on the
-    table (a pen, a battery) with the flat pinch its hand file declares for one (`round_pinch`: the fingers and
-    how far the others fold), other hands as the step's grasp; place_either_end: true (with place_axis) turns the
-    other end down where turning place_axis down would run the hand into its own arm. return_home: true sends the
-    hand back to its home pose once it has let go, rather than leaving it risen over the place (where the other arm
-    reaches in next).
+    table (a pen, a battery) with the flat pinch its hand file declares for one (`round_pinch`: the fingers, how
+    far the others fold, how high the tips close), other hands as the step's grasp; grasp_arm_clear: true (a flat
+    pinch) turns the hand another way as good for the tips where the arm at the grasp runs into the scene;
+    place_either_end: true (with place_axis) turns the other end down where turning place_axis down would run the
+    hand into its own arm. return_home: true sends the hand back to its home pose once it has let go, rather than
+    leaving it risen over the place (where the other arm reaches in next).
     fallback {field: value, ...} is the step done another way where the arm cannot do it as written
     (teleop/plan_steps/fallback.py): its IK, tracked along the step's planned wrist path, strays more than 10 cm
     from it (another branch), or a `place_axis` turn leaves an arm joint within 0.2 rad of its limit; those fields
@@ -101,6 +102,9 @@ class PickStep(PlanStep, GraspFields):
     # pinch: the hand file's flat pinch for a thin round object lying on the table where it declares one (a pen, a
     # battery; teleop/plan_steps/pick.py), else the step's grasp
     round_pinch: Bool = False
+    # flat pinch: where the arm at the closed grasp runs into the scene (the UR5's wrist_1 link onto the pen cup),
+    # another turn of the hand nearly as good for the tips that keeps it clear (teleop/plan_steps/pick_place.py)
+    grasp_arm_clear: Bool = False
     # lifted this far over the grasp and carried this far over the place (default LIFT_HEIGHT_M, 14 cm): a lower
     # carry, less swing for a piece held by its edges (teleop/plan_steps/pick_place.py)
     lift_m: Number = Field(None, ge=LIFT_RANGE_M[0], le=LIFT_RANGE_M[1],
@@ -184,6 +188,8 @@ class PickStep(PlanStep, GraspFields):
         only_with_grasp(("power", SIDE_GRASP), "how far a palm grasp closes"))
     _pinch_only = field_validator("round_pinch", mode="before")(
         only_with_grasp(("pinch", "flat_pinch"), "the hand's pinch for a thin round object"))
+    _flat_arm_clear = field_validator("grasp_arm_clear", mode="before")(
+        only_with_grasp("flat_pinch", "the turn of a flat pinch's hand that keeps its arm clear"))
     _flat_place_only = field_validator("release_pinch_only", "place_press_m", "release_relax", "place_yaw",
                                        "ease_turned", mode="before")(
         only_with_grasp("flat_pinch", "how a flat pinch lets a thin object go"))
