@@ -163,32 +163,12 @@ def flat_pinch_rotation(hand_name: str, side: str, ready: np.ndarray, fingers: t
 
 
 @functools.lru_cache(maxsize=None)
-def _flat_pinch_rotation(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None) -> np.ndarray:
+def _scored_rotations(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None
+                      ) -> tuple[tuple[float, np.ndarray], ...]:
+    """(cost, rotation) of every pitch and roll about the fingers, in the order tried: the cost is how high the
+    spread hand's (``ready``) highest tip sits above the bottom of the hand, plus how far the arm's flange comes
+    below BASE_CLEARANCE_M over it."""
     q = np.array(ready)
-    tips = tip_points(hand_name, tip_pinch(hand_name, fingers).fingers, q)
-    tips = tips @ M if side == "left" else tips
-    outline = hand_outline(hand_name, side, q)
-    base = hand_kinematics(hand_name).hand.wrist_site.to_local(np.zeros(3))
-    base = base @ M if side == "left" else base
-    best, best_cost = None, np.inf
-    for pitch in PITCHES_DEG:
-        for roll in ROLLS_DEG:
-            R = _turned(pitch, roll)
-            low = (outline @ R.T)[:, 2].min()
-            cost = (tips @ R.T)[:, 2].max() - low     # the highest tip above the bottom of the hand
-            cost += max(0.0, BASE_CLEARANCE_M - ((R @ base)[2] - low))    # the arm kept off the table
-            if cost < best_cost - 1e-9:
-                best, best_cost = R, cost
-    best.flags.writeable = False
-    return best
-
-
-@functools.lru_cache(maxsize=None)
-def near_rotations(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None) -> tuple[np.ndarray, ...]:
-    """flat_pinch_rotation's rotation first, then the other pitches and rolls whose highest tip is within
-    NEAR_ROTATION_M of its, nearest first: a flat pinch as good, with the arm turned another way (`grasp_arm_clear`)."""
-    q = np.array(ready)
-    best = _flat_pinch_rotation(hand_name, side, ready, fingers)
     tips = tip_points(hand_name, tip_pinch(hand_name, fingers).fingers, q)
     tips = tips @ M if side == "left" else tips
     outline = hand_outline(hand_name, side, q)
@@ -198,16 +178,33 @@ def near_rotations(hand_name: str, side: str, ready: tuple, fingers: tuple[str, 
     for pitch in PITCHES_DEG:
         for roll in ROLLS_DEG:
             R = _turned(pitch, roll)
+            R.flags.writeable = False
             low = (outline @ R.T)[:, 2].min()
-            cost = (tips @ R.T)[:, 2].max() - low + max(0.0, BASE_CLEARANCE_M - ((R @ base)[2] - low))
+            cost = (tips @ R.T)[:, 2].max() - low     # the highest tip above the bottom of the hand
+            cost += max(0.0, BASE_CLEARANCE_M - ((R @ base)[2] - low))    # the arm kept off the table
             scored.append((cost, R))
+    return tuple(scored)
+
+
+@functools.lru_cache(maxsize=None)
+def _flat_pinch_rotation(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None) -> np.ndarray:
+    best, best_cost = None, np.inf
+    for cost, R in _scored_rotations(hand_name, side, ready, fingers):
+        if cost < best_cost - 1e-9:
+            best, best_cost = R, cost
+    return best
+
+
+@functools.lru_cache(maxsize=None)
+def near_rotations(hand_name: str, side: str, ready: tuple, fingers: tuple[str, ...] | None) -> tuple[np.ndarray, ...]:
+    """flat_pinch_rotation's rotation first, then the other pitches and rolls whose highest tip is within
+    NEAR_ROTATION_M of its, nearest first: a flat pinch as good, with the arm turned another way (`grasp_arm_clear`)."""
+    best = _flat_pinch_rotation(hand_name, side, ready, fingers)
+    scored = _scored_rotations(hand_name, side, ready, fingers)
     least = min(cost for cost, _ in scored)
     near = sorted(((c, R) for c, R in scored if c <= least + NEAR_ROTATION_M and not np.allclose(R, best)),
                   key=lambda cR: cR[0])
-    out = (best, *(R for _, R in near))
-    for R in out:
-        R.flags.writeable = False
-    return out
+    return (best, *(R for _, R in near))
 
 
 def width_along(model: mujoco.MjModel, data: mujoco.MjData, body: int, axis: np.ndarray,

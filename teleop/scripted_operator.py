@@ -113,7 +113,7 @@ class ScriptedOperator:
                 # the hand holds still until those steps are done (opt-in: parked out of the other arm's way)
                 wait_parked(self, data, side, out_m, wait_until)
                 rest_out[side["name"]] = out_m
-            plan_step(self, data, item)      # its kind's planner (a pick's fallback, lying_pinch: fallback.py)
+            plan_step(self, data, item, stepping)      # its kind's planner (a pick's fallback: fallback.py)
             ends.append(max(tl.end for tl in tls))
             self.moves += [(ends[-1], *left) for left in self._leaving]
             self._leaving = []

@@ -18,7 +18,7 @@ import copy
 
 import mujoco
 
-from sim.demo_plan import BOTH_HANDS, step_kind
+from sim.demo_plan import step_kind
 from teleop.plan_steps import PLANNERS
 
 STRAY_M = 0.10              # the arm's IK further than this off the step's planned wrist path: on another branch
@@ -26,9 +26,9 @@ TURN_MARGIN_RAD = 0.2       # a place_axis turn leaving a joint nearer its limit
 IK_ITERS = 30               # per control step, warm-started (as ScriptedOperator.act)
 
 
-def plan_step(op, data: mujoco.MjData, item: dict) -> None:
-    """Plan ``item`` (its kind's planner), with its `fallback` fields if the arm cannot do it as written."""
-    sides = [s for n, s in op.sides.items() if item["hand"] in (n, BOTH_HANDS)]
+def plan_step(op, data: mujoco.MjData, item: dict, sides: list[dict]) -> None:
+    """Plan ``item`` (its kind's planner) for its hands' ``sides``, with its `fallback` fields if the arm cannot do
+    it as written."""
     if not item.get("fallback"):
         PLANNERS[step_kind(item)](op, data, item)
         return

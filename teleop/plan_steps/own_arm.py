@@ -1,6 +1,7 @@
 """How far a planned wrist pose runs a hand into its own arm, which the arm's IK does not see: turned to stand
 a marker up in the pen cup, the Schunk's thumb base went 4-5 cm into the UR5's forearm
-(stationery_category_sorting), and in physics the wrist stopped 10 cm short of the cup."""
+(stationery_category_sorting), and in physics the wrist stopped 10 cm short of the cup. Also how deep any two sets
+of bodies meet with an arm at given joints (contact_depth: park.py's check of the other arm against a resting hand)."""
 
 from __future__ import annotations
 
@@ -32,17 +33,26 @@ def arm_into_scene(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarra
 
 def _deepest(op, data: mujoco.MjData, side: dict, poses, q_seed: np.ndarray, these: set, those: set) -> float:
     """The deepest contact between bodies ``these`` and ``those`` with ``side``'s arm at each of ``poses``."""
-    model, lay = op.scene.model, op.scene.layout.sides[side["name"]]
-    joints = [model.joint(j).qposadr[0] for j in lay.arm_joints]
-    probe = mujoco.MjData(model)
+    probe = mujoco.MjData(op.scene.model)
     q, deepest = q_seed, 0.0
     for pos, quat in poses:
         q = side["kin"].ik(pos, quat, q).q
-        probe.qpos[:] = data.qpos
-        probe.qpos[joints] = q
-        mujoco.mj_forward(model, probe)
-        for c in probe.contact[:probe.ncon]:
-            a, b = model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]
-            if a in these and b in those or b in these and a in those:
-                deepest = max(deepest, -float(c.dist))
+        deepest = max(deepest, contact_depth(op, data, probe, side["name"], q, these, those))
+    return deepest
+
+
+def contact_depth(op, data: mujoco.MjData, probe: mujoco.MjData, side_name: str, q: np.ndarray, these: set,
+                  those: set) -> float:
+    """How deep (metres, 0 if apart) bodies ``these`` and ``those`` meet with side ``side_name``'s arm joints at
+    ``q`` and the rest of the scene as in ``data`` (``probe``: scratch data for the check)."""
+    model = op.scene.model
+    joints = [model.joint(j).qposadr[0] for j in op.scene.layout.sides[side_name].arm_joints]
+    probe.qpos[:] = data.qpos
+    probe.qpos[joints] = q
+    mujoco.mj_forward(model, probe)
+    deepest = 0.0
+    for c in probe.contact[:probe.ncon]:
+        a, b = model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]
+        if a in these and b in those or b in these and a in those:
+            deepest = max(deepest, -float(c.dist))
     return deepest

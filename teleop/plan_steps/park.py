@@ -12,6 +12,7 @@ import mujoco
 import numpy as np
 
 from teleop.operator_motion import DURATIONS, SideTimeline
+from teleop.plan_steps.own_arm import contact_depth
 
 # deeper than this the other arm's planned pose meets a hand resting at home: the RM65's right forearm
 # grazes the resting left hand by 1-6 mm on 4 of 12 stationery seeds and passes; the JAKA's goes 1-5 cm in
@@ -39,19 +40,13 @@ def meets_resting(op, data: mujoco.MjData, side: dict, first: int, last: int | N
     for other in (s for s in op.sides.values() if s is not side):
         lay = sides[other["name"]]
         theirs = {model.body(b).id for b in (*lay.arm_bodies, *lay.hand_bodies)}
-        joints = [model.joint(j).qposadr[0] for j in lay.arm_joints]
         q = other["q_home"].copy()
         moved = reaimed(op, data, other)
         for i, frame in enumerate(other["timeline"].frames):
             q = other["kin"].ik(frame.pos + moved[i], frame.quat, q).q     # warm-started along the path, as tracked
             if frame.end_step <= first or (last is not None and frame.end_step > last):
                 continue
-            probe.qpos[:] = data.qpos
-            probe.qpos[joints] = q
-            mujoco.mj_forward(model, probe)
-            pairs = {(model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]) for c in probe.contact[:probe.ncon]
-                     if c.dist < -MEET_DEPTH_M}
-            if any(a in mine and b in theirs or b in mine and a in theirs for a, b in pairs):
+            if contact_depth(op, data, probe, other["name"], q, mine, theirs) > MEET_DEPTH_M:
                 return True
     return False
 
